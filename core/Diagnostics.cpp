@@ -1,0 +1,90 @@
+#include "core/Diagnostics.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <limits>
+
+namespace mpm {
+
+namespace {
+constexpr std::size_t kReduceGrain = 8192;
+
+struct Sums {
+    double mass = 0, ke = 0, pe = 0, vmax = 0;
+    Vec3d p = Vec3d::Zero(), L = Vec3d::Zero();
+    double minJ = std::numeric_limits<double>::infinity(), maxJ = -std::numeric_limits<double>::infinity();
+    Sums operator+(const Sums& o) const {
+        Sums s;
+        s.mass = mass + o.mass; s.ke = ke + o.ke; s.pe = pe + o.pe; s.vmax = std::max(vmax, o.vmax);
+        s.p = p + o.p; s.L = L + o.L; s.minJ = std::min(minJ, o.minJ); s.maxJ = std::max(maxJ, o.maxJ);
+        return s;
+    }
+};
+}  // namespace
+
+FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale) {
+    Sums total;
+    const double D = inertiaScale * dx * dx;
+    for (const AnySpecies& s : species) {
+        total = total + std::visit(
+            [&](const auto& sp) {
+                using M = typename std::decay_t<decltype(sp)>::Material;
+                const ParticleArrays& P = sp.p;
+                return tbb::parallel_deterministic_reduce(
+                    tbb::blocked_range<std::size_t>(0, P.size(), kReduceGrain), Sums(),
+                    [&](const tbb::blocked_range<std::size_t>& r, Sums acc) {
+                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                            const double m = P.mass[i];
+                            const Vec3d v = P.v[i].cast<double>();
+                            const Mat3d B = P.C[i].cast<double>() * D;
+                            acc.mass += m;
+                            acc.p += m * v;
+                            acc.L += P.x[i].cross(m * v) +
+                                     m * Vec3d(B(2, 1) - B(1, 2), B(0, 2) - B(2, 0), B(1, 0) - B(0, 1));
+                            acc.ke += 0.5 * m * v.squaredNorm();
+                            acc.pe += P.volume0[i] * M::energyDensity(sp.params, sp.state, i);
+                            acc.vmax = std::max(acc.vmax, v.norm());
+                            const double J = M::volumeRatio(sp.state, i);
+                            acc.minJ = std::min(acc.minJ, J);
+                            acc.maxJ = std::max(acc.maxJ, J);
+                        }
+                        return acc;
+                    },
+                    [](const Sums& a, const Sums& b) { return a + b; });
+            },
+            s);
+    }
+    FrameStats st;
+    for (const AnySpecies& s : species) st.particles += particlesOf(s).size();
+    st.mass = total.mass;
+    st.momentum = total.p;
+    st.angularMomentum = total.L;
+    st.kineticEnergy = total.ke;
+    st.elasticEnergy = total.pe;
+    st.maxSpeed = total.vmax;
+    if (st.particles) {
+        st.minJ = total.minJ;
+        st.maxJ = total.maxJ;
+    }
+    return st;
+}
+
+std::string FrameStats::csvHeader() {
+    return "frame,time,particles,mass,momentum_x,momentum_y,momentum_z,angular_momentum_x,angular_momentum_y,"
+           "angular_momentum_z,kinetic_energy,elastic_energy,max_speed,min_J,max_J,active_leaves,grid_bytes,substeps,"
+           "wall_seconds";
+}
+
+std::string FrameStats::csvRow() const {
+    char buf[1024];
+    std::snprintf(buf, sizeof(buf), "%d,%.9g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%zu,%zu,%d,%.6f",
+                  frame, time, particles, mass, momentum[0], momentum[1], momentum[2], angularMomentum[0],
+                  angularMomentum[1], angularMomentum[2], kineticEnergy, elasticEnergy, maxSpeed, minJ, maxJ,
+                  activeLeaves, gridBytes, substeps, wallSeconds);
+    return buf;
+}
+
+}  // namespace mpm

@@ -1,0 +1,35 @@
+#pragma once
+// Per-frame diagnostics (engine issue, item 10): conservation quantities, energies, extremes, grid size.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/Species.h"
+
+namespace mpm {
+
+struct FrameStats {
+    int frame = 0;
+    double time = 0.0;
+    std::size_t particles = 0;
+    double mass = 0.0;
+    Vec3d momentum = Vec3d::Zero();
+    Vec3d angularMomentum = Vec3d::Zero();  ///< about the origin, APIC affine part included
+    double kineticEnergy = 0.0;
+    double elasticEnergy = 0.0;
+    double maxSpeed = 0.0;
+    double minJ = 1.0, maxJ = 1.0;
+    std::size_t activeLeaves = 0;
+    std::size_t gridBytes = 0;
+    int substeps = 0;
+    double wallSeconds = 0.0;
+
+    static std::string csvHeader();
+    std::string csvRow() const;
+};
+
+/// Sums over all particles. Deterministic: a fixed-grain reduction whose split does not depend on threads.
+/// inertiaScale is D_p / dx^2 (1/4 quadratic, 1/3 cubic), for the APIC angular momentum m eps : (C D)^T.
+FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale);
+
+}  // namespace mpm

@@ -1,0 +1,206 @@
+#include "core/Simulation.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace mpm {
+
+namespace {
+constexpr std::size_t kPermuteGrain = 16384;
+/// Relative slack when splitting the rest of a frame into equal substeps.
+constexpr double kFrameSplitSlack = 1e-9;
+}  // namespace
+
+Simulation::Simulation(const SimulationSettings& settings) : settings_(settings) {
+    withKernel(settings_.transfer.interpolation,
+               [&]<class K>() { grid_.configure(settings_.dx, K::kBaseShift, K::kWidth); });
+}
+
+float Simulation::kernelInertiaScale() const {
+    return withKernel(settings_.transfer.interpolation, []<class K>() { return 1.0f / K::kInverseInertia; });
+}
+
+int Simulation::addSpecies(AnySpecies species) {
+    species_.push_back(std::move(species));
+    minStiffnessKey_.push_back(std::numeric_limits<float>::infinity());
+    destination_.emplace_back();
+    return int(species_.size()) - 1;
+}
+
+void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set) {
+    std::visit(
+        [&](auto& sp) {
+            using M = typename std::decay_t<decltype(sp)>::Material;
+            ParticleArrays& P = sp.p;
+            const std::size_t n0 = P.size(), n = x.size();
+            P.x.insert(P.x.end(), x.begin(), x.end());
+            P.v.resize(n0 + n, v);
+            P.C.resize(n0 + n, Mat3f::Zero());
+            P.mass.resize(n0 + n, mass);
+            P.volume0.resize(n0 + n, volume);
+            P.set.resize(n0 + n, set);
+            for (std::size_t i = 0; i < n; ++i) P.id.push_back(nextId_++);
+            sp.state.appendRest(n);
+            for (std::size_t i = n0; i < n0 + n; ++i)
+                minStiffnessKey_[s] = std::min(minStiffnessKey_[s], M::stiffnessKey(sp.state, i));
+        },
+        species_.at(s));
+    if (!x.empty()) maxSpeed_ = std::max(maxSpeed_, v.norm());
+}
+
+std::size_t Simulation::particleCount() const {
+    std::size_t n = 0;
+    for (const AnySpecies& s : species_) n += particlesOf(s).size();
+    return n;
+}
+
+void Simulation::emitDue() {
+    if (emittedFrame_ == frame_) return;
+    emittedFrame_ = frame_;
+    for (const Emitter& e : emitters_)
+        if (e.emitsAt(frame_)) addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set);
+}
+
+double Simulation::cflTimeStep() const {
+    if (!settings_.adaptive) return std::numeric_limits<double>::infinity();
+    float c = 0.0f;
+    for (std::size_t s = 0; s < species_.size(); ++s) {
+        if (particlesOf(species_[s]).size() == 0) continue;
+        c = std::max(c, std::visit(
+                            [&](const auto& sp) {
+                                using M = typename std::decay_t<decltype(sp)>::Material;
+                                return M::waveSpeed(sp.params, minStiffnessKey_[s]);
+                            },
+                            species_[s]));
+    }
+    const double speed = double(c) + double(maxSpeed_);
+    return speed > 0.0 ? settings_.cfl * settings_.dx / speed : std::numeric_limits<double>::infinity();
+}
+
+template <class S>
+void Simulation::permute(S& sp, const std::vector<uint32_t>& dest) {
+    sp.forEachArray([&](auto& arr) {
+        using T = typename std::decay_t<decltype(arr)>::value_type;
+        auto& tmp = std::get<std::vector<T>>(scratch_);
+        tmp.resize(arr.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, arr.size(), kPermuteGrain), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) tmp[dest[i]] = arr[i];
+        });
+        arr.swap(tmp);
+    });
+}
+
+void Simulation::bin() {
+    std::vector<BinRequest> requests(species_.size());
+    for (std::size_t s = 0; s < species_.size(); ++s) {
+        std::visit([&](auto& sp) { requests[s] = BinRequest{&sp.p.x, &destination_[s], &sp.leafStart}; }, species_[s]);
+    }
+    grid_.rebuild(requests);
+    for (std::size_t s = 0; s < species_.size(); ++s) {
+        const std::vector<uint32_t>& dest = destination_[s];
+        // Particles rarely change leaf between substeps: skip the permutation when it is the identity.
+        const bool identity = tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, dest.size(), kPermuteGrain), true,
+            [&](const auto& r, bool ok) {
+                for (std::size_t i = r.begin(); ok && i < r.end(); ++i) ok = dest[i] == i;
+                return ok;
+            },
+            [](bool a, bool b) { return a && b; });
+        if (!identity) std::visit([&](auto& sp) { permute(sp, dest); }, species_[s]);
+    }
+}
+
+float Simulation::updateGrid(float dt) {
+    const Vec3f g = settings_.gravity.cast<float>();
+    const double tEnd = time_ + dt;
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, grid_.leafCount()), 0.0f,
+        [&](const tbb::blocked_range<std::size_t>& r, float vmax) {
+            for (std::size_t l = r.begin(); l < r.end(); ++l) {
+                const LeafView& leaf = grid_.leaf(l);
+                // v = (mv) / m on nodes with mass (exact comparison: a threshold would lose momentum), then gravity.
+                for (int n = 0; n < kLeafNodes; ++n) {
+                    Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
+                    const float m = leaf.mass[n];
+                    if (m != 0.0f) v = v / m + dt * g;
+                    else v.setZero();
+                }
+                for (const auto& c : colliders_) c->applyToLeaf(leaf, settings_.dx, tEnd);
+                for (int n = 0; n < kLeafNodes; ++n)
+                    if (leaf.mass[n] != 0.0f) vmax = std::max(vmax, Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm());
+            }
+            return vmax;
+        },
+        [](float a, float b) { return std::max(a, b); });
+}
+
+double Simulation::substep(double dtMax) {
+    // Bin particles by leaf; allocate the leaves their stencils reach and release the others.
+    bin();
+    // Time step: the caller's bound (target and frame end), and the CFL condition.
+    double dt = std::min(dtMax, cflTimeStep());
+    // P2G: mass and momentum, with the stress impulse of this step folded in (thesis 3.14, 3.15, 3.24).
+    particlesToGrid(grid_, species_, settings_.transfer, float(dt));
+    // Grid update: v = mv/m, gravity, colliders and friction (3.20, 3.26, section 5).
+    const float vmaxGrid = updateGrid(float(dt));
+    // Thesis pseudocode 3: if a node would move more than maxDisplacement cells, redo with a shorter step.
+    if (settings_.maxDisplacement > 0.0 && vmaxGrid * dt > settings_.maxDisplacement * settings_.dx) {
+        dt = settings_.maxDisplacement * settings_.dx / vmaxGrid;
+        particlesToGrid(grid_, species_, settings_.transfer, float(dt));
+        updateGrid(float(dt));
+    }
+    // G2P: velocity, affine velocity, deformation update with return mapping, advection (3.17-3.19, 3.21).
+    const G2PSummary g2p = gridToParticles(grid_, species_, settings_.transfer, float(dt));
+    if (g2p.badParticle >= 0) {
+        const ParticleArrays& P = particlesOf(species_[g2p.badSpecies]);
+        std::ostringstream msg;
+        msg << "non-finite " << g2p.badField << " at frame " << frame_ << ", substep " << substeps_ << " (t = " << time_
+            << " s, dt = " << dt << " s): particle id " << P.id[g2p.badParticle] << " of species "
+            << std::visit([](const auto& sp) { return sp.name; }, species_[g2p.badSpecies]);
+        throw SimulationError(msg.str());
+    }
+    maxSpeed_ = g2p.maxSpeed;
+    minStiffnessKey_ = g2p.minStiffnessKey;
+    time_ += dt;
+    ++substeps_;
+    return dt;
+}
+
+FrameStats Simulation::advanceFrame() {
+    const auto start = std::chrono::steady_clock::now();
+    emitDue();
+    const double frameEnd = double(frame_ + 1) / settings_.fps;
+    int steps = 0;
+    while (time_ < frameEnd) {
+        const double remaining = frameEnd - time_;
+        const double dtMax = std::min(settings_.targetDt(), cflTimeStep());
+        // Split the rest of the frame into equal substeps so that the last one lands on the frame time.
+        const double pieces = std::max(1.0, std::ceil(remaining / dtMax - kFrameSplitSlack));
+        const double dt = remaining / pieces;
+        const double taken = substep(dt);
+        ++steps;
+        if (pieces == 1.0 && taken == dt) time_ = frameEnd;
+    }
+    ++frame_;
+    emitDue();
+    FrameStats st = measure();
+    st.substeps = steps;
+    st.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return st;
+}
+
+FrameStats Simulation::measure() const {
+    FrameStats st = measureParticles(species_, settings_.dx, kernelInertiaScale());
+    st.frame = frame_;
+    st.time = time_;
+    st.activeLeaves = grid_.leafCount();
+    st.gridBytes = grid_.memoryBytes();
+    return st;
+}
+
+}  // namespace mpm

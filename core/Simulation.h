@@ -1,0 +1,108 @@
+#pragma once
+// The explicit MPM driver: species, colliders and emitters around a sparse grid, advanced substep by
+// substep (ALGORITHM.md, "One explicit step") with frames ending exactly on frame times.
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "core/Collider.h"
+#include "core/Diagnostics.h"
+#include "core/Species.h"
+#include "sparse/SparseGrid.h"
+#include "sparse/Transfer.h"
+
+namespace mpm {
+
+struct SimulationSettings {
+    double dx = 0.02;                         ///< grid spacing [m]
+    Vec3d gravity = Vec3d(0.0, -9.81, 0.0);   ///< Y is up, as in Houdini [m/s^2]
+    TransferSettings transfer;
+    double fps = 24.0;
+    int substepsPerFrame = 20;                ///< target dt = 1 / (fps * substepsPerFrame)
+    bool adaptive = true;                     ///< also bound dt by the CFL condition
+    double cfl = 0.5;                         ///< C in dt <= C dx / (c + |v|max)
+    double maxDisplacement = 0.0;             ///< thesis rule: max node displacement per substep in cells; 0 = off
+
+    double targetDt() const { return 1.0 / (fps * substepsPerFrame); }
+};
+
+/// A particle set that emits copies of a sampled shape at frame starts (thesis section 6.2).
+struct Emitter {
+    int species = 0;
+    uint16_t set = 0;
+    std::vector<Vec3d> positions;
+    Vec3f velocity = Vec3f::Zero();
+    float mass = 0.0f, volume = 0.0f;  ///< per particle
+    int startFrame = 0;
+    int durationFrames = 1;            ///< emissions happen in [startFrame, startFrame + durationFrames)
+    int pauseFrames = 0;               ///< frames skipped between two emissions
+
+    bool emitsAt(int frame) const {
+        return frame >= startFrame && frame < startFrame + durationFrames && (frame - startFrame) % (pauseFrames + 1) == 0;
+    }
+};
+
+/// A blow-up or invalid state found during a substep; the message names frame, substep, particle and field.
+class SimulationError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+class Simulation {
+public:
+    explicit Simulation(const SimulationSettings& settings);
+
+    const SimulationSettings& settings() const { return settings_; }
+    int addSpecies(AnySpecies species);
+    /// Appends particles at rest state (F = I, J = 1, C = 0) and gives them fresh ids.
+    void addParticles(int species, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set);
+    void addCollider(std::unique_ptr<Collider> c) { colliders_.push_back(std::move(c)); }
+    void addEmitter(Emitter e) { emitters_.push_back(std::move(e)); }
+
+    /// Emits the particle sets due at the current frame, once.
+    void emitDue();
+    /// Runs substeps to the next frame time, then emits what is due there. Returns that frame's stats.
+    FrameStats advanceFrame();
+    /// One substep no longer than dtMax (and the CFL bound); returns the step taken.
+    double substep(double dtMax);
+
+    /// dt <= C dx / (c + |v|max): c from the stiffest species, |v|max from the last G2P.
+    double cflTimeStep() const;
+    FrameStats measure() const;
+
+    std::vector<AnySpecies>& species() { return species_; }
+    const std::vector<AnySpecies>& species() const { return species_; }
+    const SparseGrid& grid() const { return grid_; }
+    double time() const { return time_; }
+    int frame() const { return frame_; }
+    long long substepCount() const { return substeps_; }
+    std::size_t particleCount() const;
+    float kernelInertiaScale() const;
+
+private:
+    void bin();
+    float updateGrid(float dt);
+    template <class S> void permute(S& species, const std::vector<uint32_t>& destination);
+
+    SimulationSettings settings_;
+    SparseGrid grid_;
+    std::vector<AnySpecies> species_;
+    std::vector<std::unique_ptr<Collider>> colliders_;
+    std::vector<Emitter> emitters_;
+    std::vector<std::vector<uint32_t>> destination_;
+    std::vector<float> minStiffnessKey_;
+    float maxSpeed_ = 0.0f;
+    double time_ = 0.0;
+    int frame_ = 0;
+    int emittedFrame_ = -1;
+    long long substeps_ = 0;
+    int32_t nextId_ = 0;
+    std::tuple<std::vector<Vec3d>, std::vector<Vec3f>, std::vector<Mat3f>, std::vector<float>, std::vector<int32_t>,
+               std::vector<uint16_t>>
+        scratch_;
+};
+
+}  // namespace mpm

@@ -1,0 +1,54 @@
+#pragma once
+// Particles are grouped in species: one constitutive model with one parameter set, stored as structure of
+// arrays holding only what that model needs (water: J; elastic: F; ...). Kernels are templates over the
+// material and are dispatched once per species and leaf range with std::visit, never per particle.
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "core/Types.h"
+#include "materials/Materials.h"
+
+namespace mpm {
+
+/// Attributes every particle has, whatever its material.
+struct ParticleArrays {
+    std::vector<Vec3d> x;         ///< position [m], double so that precision does not decay far from the origin
+    std::vector<Vec3f> v;         ///< velocity [m/s]
+    std::vector<Mat3f> C;         ///< APIC affine velocity C = B D^-1 [1/s]
+    std::vector<float> mass;      ///< [kg]
+    std::vector<float> volume0;   ///< reference volume V_p^0 [m^3]
+    std::vector<int32_t> id;      ///< stable identifier across frames
+    std::vector<uint16_t> set;    ///< index of the particle set that emitted it
+
+    template <class F> void forEachArray(F&& f) { f(x); f(v); f(C); f(mass); f(volume0); f(id); f(set); }
+    std::size_t size() const { return x.size(); }
+};
+
+/// One material model with one parameter set and its particles.
+template <class M>
+struct Species {
+    using Material = M;
+    std::string name;
+    typename M::Params params;
+    ParticleArrays p;
+    typename M::State state;
+    /// Particles of grid leaf l are [leafStart[l], leafStart[l+1]) after binning.
+    std::vector<uint32_t> leafStart;
+
+    template <class F> void forEachArray(F&& f) { p.forEachArray(f); state.forEachArray(f); }
+    std::size_t size() const { return p.size(); }
+};
+
+/// The closed set of species types, one per material in materials/Materials.h.
+template <class List> struct SpeciesVariantOf;
+template <class... Ms> struct SpeciesVariantOf<MaterialList<Ms...>> { using type = std::variant<Species<Ms>...>; };
+using AnySpecies = SpeciesVariantOf<AllMaterials>::type;
+
+/// Common attributes of any species, without knowing its material.
+inline ParticleArrays& particlesOf(AnySpecies& s) { return std::visit([](auto& sp) -> ParticleArrays& { return sp.p; }, s); }
+inline const ParticleArrays& particlesOf(const AnySpecies& s) {
+    return std::visit([](const auto& sp) -> const ParticleArrays& { return sp.p; }, s);
+}
+
+}  // namespace mpm

@@ -1,0 +1,56 @@
+#pragma once
+// Weakly compressible water (thesis eq. 4.1-4.2, pseudocode 4; Tait-like equation of state as used by
+// Tampubolon et al. 2017). The species stores J only, never F: deviatoric strain carries no energy.
+//   Psi(J) = -k (J^(1-gamma) / (1-gamma) - J),   p = -dPsi/dJ = k (J^-gamma - 1),
+//   Kirchhoff stress tau = J dPsi/dJ I = -J p I,  J <- (1 + dt tr(grad v)) J.
+#include <cmath>
+#include <vector>
+
+#include "core/Types.h"
+
+namespace mpm {
+
+struct Water {
+    static constexpr const char* kName = "water";
+
+    struct Params {
+        float density = 1000.0f;     ///< rho0 [kg/m^3]
+        float bulkModulus = 5.0e4f;  ///< k [Pa]; the thesis's k = 50 at rho = 1, scaled with rho (same sound speed)
+        float gamma = 4.0f;          ///< stiffening exponent (thesis default 4; Becker and Teschner use 7)
+    };
+
+    struct State {
+        std::vector<float> J;  ///< volume ratio det F
+        template <class F> void forEachArray(F&& f) { f(J); }
+        void appendRest(std::size_t n) { J.resize(J.size() + n, 1.0f); }
+    };
+
+    static float pressure(const Params& m, float J) { return m.bulkModulus * (std::pow(J, -m.gamma) - 1.0f); }
+
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
+        const float J = s.J[i];
+        return Mat3f::Identity() * (-J * pressure(m, J));
+    }
+
+    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
+        s.J[i] *= 1.0f + dt * gradV.trace();
+    }
+
+    /// Psi(J) - Psi(1), so that the stored energy is zero at rest.
+    static double energyDensity(const Params& m, const State& s, std::size_t i) {
+        const double k = m.bulkModulus, g = m.gamma, J = s.J[i];
+        auto psi = [&](double j) { return -k * (std::pow(j, 1.0 - g) / (1.0 - g) - j); };
+        return psi(J) - psi(1.0);
+    }
+
+    static float volumeRatio(const State& s, std::size_t i) { return s.J[i]; }
+
+    /// The wave speed grows as J shrinks: c = sqrt(k gamma / rho0) J^((1-gamma)/2) (validation README).
+    static float stiffnessKey(const State& s, std::size_t i) { return s.J[i]; }
+    static float waveSpeed(const Params& m, float minJ) {
+        const float J = std::fmax(minJ, 1e-3f);
+        return std::sqrt(m.bulkModulus * m.gamma / m.density) * std::pow(J, 0.5f * (1.0f - m.gamma));
+    }
+};
+
+}  // namespace mpm

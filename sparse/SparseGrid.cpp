@@ -1,0 +1,192 @@
+// OpenVDB-backed sparse grid: leaf topology from particles, leaf release, and the counting sort of particles
+// by leaf. Everything here is deterministic: the leaf order comes from the tree's ordered traversal and
+// the particle order from a stable counting sort, whatever the number of threads.
+#include "sparse/SparseGrid.h"
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Prune.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+
+namespace mpm {
+
+namespace {
+/// Particles per task when scanning positions; large enough to amortise a tree accessor.
+constexpr std::size_t kScanGrain = 4096;
+/// Upper bound on counting-sort chunks: the histogram is chunks x leaves integers.
+constexpr std::size_t kMaxSortChunks = 64;
+constexpr std::size_t kMinSortChunkSize = 2048;
+
+/// Collects the set of leaf coordinates (base node >> 3) that hold particles.
+struct LeafCollector {
+    const std::vector<Vec3d>& x;
+    const SparseGrid& grid;
+    openvdb::MaskTree tree;
+    LeafCollector(const std::vector<Vec3d>& xs, const SparseGrid& g) : x(xs), grid(g) {}
+    LeafCollector(LeafCollector& o, tbb::split) : x(o.x), grid(o.grid) {}
+    void operator()(const tbb::blocked_range<std::size_t>& r) {
+        openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(tree);
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const Vec3i b = grid.baseNode(x[i]);
+            acc.setValueOn(openvdb::Coord(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2));
+        }
+    }
+    void join(LeafCollector& o) { tree.topologyUnion(o.tree); }
+};
+}  // namespace
+
+struct SparseGrid::Trees {
+    openvdb::FloatTree mass{0.0f};
+    openvdb::Vec3STree momentum{openvdb::Vec3s(0.0f)};
+    openvdb::Int32Tree leafIndex{-1};  ///< one voxel per grid leaf, at its leaf coordinate
+    openvdb::MaskTree particleLeaves;  ///< leaf coordinates that hold particles
+    openvdb::MaskTree gridLeaves;      ///< particle leaves dilated by one towards +x, +y, +z
+};
+
+SparseGrid::SparseGrid() : trees_(std::make_unique<Trees>()) { openvdb::initialize(); }
+SparseGrid::~SparseGrid() = default;
+SparseGrid::SparseGrid(SparseGrid&&) noexcept = default;
+SparseGrid& SparseGrid::operator=(SparseGrid&&) noexcept = default;
+
+void SparseGrid::configure(double dx, double baseShift, int stencilWidth) {
+    dx_ = dx;
+    invDx_ = 1.0 / dx;
+    baseShift_ = baseShift;
+    stencilWidth_ = stencilWidth;
+}
+
+void SparseGrid::rebuild(std::vector<BinRequest>& requests) {
+    Trees& t = *trees_;
+
+    // 1. Leaves that hold particles (a union of per-task sets; the union does not depend on the split).
+    t.particleLeaves.clear();
+    for (BinRequest& r : requests) {
+        LeafCollector collect(*r.positions, *this);
+        tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, r.positions->size(), kScanGrain), collect);
+        t.particleLeaves.topologyUnion(collect.tree);
+    }
+
+    // 2. Grid leaves: a particle's stencil spans at most its own leaf and the next one along each axis,
+    //    because the stencil (3 or 4 nodes) is narrower than a leaf (8 nodes).
+    t.gridLeaves.clear();
+    {
+        openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(t.gridLeaves);
+        for (auto it = t.particleLeaves.cbeginValueOn(); it; ++it) {
+            const openvdb::Coord c = it.getCoord();
+            for (int d = 0; d < 8; ++d) acc.setValueOn(c.offsetBy(d >> 2, (d >> 1) & 1, d & 1));
+        }
+    }
+
+    // 3. Release value-tree leaves no stencil reaches any more, then allocate the new ones.
+    std::vector<openvdb::Coord> stale;
+    for (auto it = t.mass.cbeginLeaf(); it; ++it) {
+        const openvdb::Coord o = it->origin();
+        if (!t.gridLeaves.isValueOn(openvdb::Coord(o.x() >> kLeafLog2, o.y() >> kLeafLog2, o.z() >> kLeafLog2)))
+            stale.push_back(o);
+    }
+    for (const openvdb::Coord& o : stale) {
+        t.mass.addTile(1, o, 0.0f, false);
+        t.momentum.addTile(1, o, openvdb::Vec3s(0.0f), false);
+    }
+    if (!stale.empty()) {  // collapse internal nodes left without leaves
+        openvdb::tools::pruneInactive(t.mass);
+        openvdb::tools::pruneInactive(t.momentum);
+    }
+
+    t.leafIndex.clear();
+    leaves_.clear();
+    hasParticles_.clear();
+    {
+        openvdb::tree::ValueAccessor<openvdb::Int32Tree> idx(t.leafIndex);
+        openvdb::tree::ValueAccessor<openvdb::FloatTree> massAcc(t.mass);
+        openvdb::tree::ValueAccessor<openvdb::Vec3STree> momAcc(t.momentum);
+        for (auto it = t.gridLeaves.cbeginValueOn(); it; ++it) {
+            const openvdb::Coord c = it.getCoord();
+            const openvdb::Coord origin(c.x() << kLeafLog2, c.y() << kLeafLog2, c.z() << kLeafLog2);
+            idx.setValue(c, int32_t(leaves_.size()));
+            auto* m = massAcc.touchLeaf(origin);
+            auto* p = momAcc.touchLeaf(origin);
+            m->setValuesOn();  // active voxels keep the leaf alive through pruneInactive
+            p->setValuesOn();
+            LeafView view;
+            view.mass = m->buffer().data();
+            view.momentum = reinterpret_cast<float*>(p->buffer().data());
+            view.origin = Vec3i(origin.x(), origin.y(), origin.z());
+            leaves_.push_back(view);
+            hasParticles_.push_back(t.particleLeaves.isValueOn(c) ? 1 : 0);
+        }
+    }
+    const std::size_t L = leaves_.size();
+
+    // 4. Particle leaves, their colours and their 8 neighbours (looked up once per leaf, not per particle).
+    particleLeaves_.clear();
+    for (auto& c : colors_) c.clear();
+    neighbours_.resize(L);
+    {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> idx(t.leafIndex);
+        for (uint32_t l = 0; l < L; ++l) {
+            if (!hasParticles_[l]) continue;
+            particleLeaves_.push_back(l);
+            const Vec3i c = leaves_[l].origin / kLeafDim;
+            colors_[((c[0] & 1) << 2) | ((c[1] & 1) << 1) | (c[2] & 1)].push_back(l);
+            for (int d = 0; d < 8; ++d)
+                neighbours_[l][d] = uint32_t(idx.getValue(openvdb::Coord(c[0] + (d >> 2), c[1] + ((d >> 1) & 1), c[2] + (d & 1))));
+        }
+    }
+
+    // 5. Stable counting sort of each species by leaf.
+    for (BinRequest& r : requests) {
+        const std::vector<Vec3d>& x = *r.positions;
+        const std::size_t N = x.size();
+        r.destination->resize(N);
+        r.leafStart->assign(L + 1, 0);
+        if (N == 0) continue;
+        leafIdScratch_.resize(N);
+        const std::size_t chunks = std::clamp<std::size_t>(N / kMinSortChunkSize, 1, kMaxSortChunks);
+        const std::size_t chunkSize = (N + chunks - 1) / chunks;
+        histogram_.assign(chunks * L, 0);
+        tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+            openvdb::tree::ValueAccessor<const openvdb::Int32Tree> idx(t.leafIndex);
+            uint32_t* hist = histogram_.data() + c * L;
+            const std::size_t end = std::min(N, (c + 1) * chunkSize);
+            for (std::size_t i = c * chunkSize; i < end; ++i) {
+                const Vec3i b = baseNode(x[i]);
+                const uint32_t l = uint32_t(idx.getValue(openvdb::Coord(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2)));
+                leafIdScratch_[i] = l;
+                ++hist[l];
+            }
+        });
+        // Exclusive prefix over (leaf, chunk): chunk c of leaf l starts after all earlier chunks of l.
+        std::vector<uint32_t>& start = *r.leafStart;
+        uint32_t running = 0;
+        for (std::size_t l = 0; l < L; ++l) {
+            start[l] = running;
+            for (std::size_t c = 0; c < chunks; ++c) {
+                const uint32_t n = histogram_[c * L + l];
+                histogram_[c * L + l] = running;
+                running += n;
+            }
+        }
+        start[L] = running;
+        tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+            uint32_t* next = histogram_.data() + c * L;
+            const std::size_t end = std::min(N, (c + 1) * chunkSize);
+            for (std::size_t i = c * chunkSize; i < end; ++i) (*r.destination)[i] = next[leafIdScratch_[i]]++;
+        });
+    }
+}
+
+std::size_t SparseGrid::memoryBytes() const {
+    const Trees& t = *trees_;
+    return std::size_t(t.mass.memUsage() + t.momentum.memUsage() + t.leafIndex.memUsage() + t.particleLeaves.memUsage() +
+                       t.gridLeaves.memUsage()) +
+           leaves_.capacity() * sizeof(LeafView) + neighbours_.capacity() * sizeof(std::array<uint32_t, 8>) +
+           histogram_.capacity() * sizeof(uint32_t) + leafIdScratch_.capacity() * sizeof(uint32_t);
+}
+
+std::size_t SparseGrid::allocatedLeaves() const { return std::size_t(trees_->mass.leafCount()); }
+
+}  // namespace mpm

@@ -1,0 +1,91 @@
+#pragma once
+// The background grid: nodes live in the 8x8x8 leaves of two OpenVDB trees (mass: float; momentum, then
+// velocity: Vec3s) that share one topology. A leaf exists only where some particle's stencil reaches and
+// is released when none does, so the domain is unbounded and memory follows the occupied volume.
+// OpenVDB stays inside SparseGrid.cpp: this header exposes raw leaf buffers only.
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "core/Types.h"
+
+namespace mpm {
+
+/// Edge of a leaf in nodes, and its node count (OpenVDB's LeafNode<T, 3>).
+inline constexpr int kLeafDim = 8;
+inline constexpr int kLeafLog2 = 3;
+inline constexpr int kLeafNodes = kLeafDim * kLeafDim * kLeafDim;
+
+/// Offset of node (x, y, z), each in [0, 8), inside a leaf buffer (OpenVDB's x-major order).
+inline int leafOffset(int x, int y, int z) { return (x << (2 * kLeafLog2)) | (y << kLeafLog2) | z; }
+
+/// Raw view of one leaf: its buffers and the integer coordinate of its first node.
+struct LeafView {
+    float* mass = nullptr;
+    float* momentum = nullptr;  ///< 3 floats per node; holds velocity after the grid update
+    Vec3i origin = Vec3i::Zero();
+};
+
+/// What binning needs to know about one species, and what it hands back.
+struct BinRequest {
+    const std::vector<Vec3d>* positions = nullptr;  ///< in: particle positions
+    std::vector<uint32_t>* destination = nullptr;   ///< out: sorted slot of each particle
+    std::vector<uint32_t>* leafStart = nullptr;     ///< out: leafCount()+1 offsets
+};
+
+class SparseGrid {
+public:
+    SparseGrid();
+    ~SparseGrid();
+    SparseGrid(const SparseGrid&) = delete;
+    SparseGrid& operator=(const SparseGrid&) = delete;
+    SparseGrid(SparseGrid&&) noexcept;
+    SparseGrid& operator=(SparseGrid&&) noexcept;
+
+    /// Sets the spacing and the stencil: base node = floor(x / dx - baseShift), stencil width nodes per axis.
+    void configure(double dx, double baseShift, int stencilWidth);
+    double dx() const { return dx_; }
+
+    /// Bins all particles by the leaf holding their stencil's base node, allocates the leaves their
+    /// stencils reach (own leaf plus the +x/+y/+z neighbours), releases the rest, and returns, for every
+    /// species, a stable counting-sort permutation and each leaf's particle range.
+    void rebuild(std::vector<BinRequest>& requests);
+
+    std::size_t leafCount() const { return leaves_.size(); }
+    const LeafView& leaf(std::size_t i) const { return leaves_[i]; }
+    /// Leaves holding particles, grouped in 8 colours by the parity of their leaf coordinate, so that two
+    /// leaves of one colour never write the same node during P2G.
+    const std::array<std::vector<uint32_t>, 8>& coloredParticleLeaves() const { return colors_; }
+    /// All leaves holding particles, in leaf order.
+    const std::vector<uint32_t>& particleLeaves() const { return particleLeaves_; }
+    /// The 8 leaves at leaf coordinate + {0,1}^3 of a particle leaf, index (dx*4 + dy*2 + dz).
+    const std::array<uint32_t, 8>& neighbours(std::size_t leafIndex) const { return neighbours_[leafIndex]; }
+
+    /// Bytes held by the grid trees and the leaf tables.
+    std::size_t memoryBytes() const;
+    /// Number of leaves allocated in the trees (equals leafCount() after rebuild).
+    std::size_t allocatedLeaves() const;
+
+    /// Base node of a particle's stencil.
+    Vec3i baseNode(const Vec3d& x) const {
+        return Vec3i(int(std::floor(x[0] * invDx_ - baseShift_)), int(std::floor(x[1] * invDx_ - baseShift_)),
+                     int(std::floor(x[2] * invDx_ - baseShift_)));
+    }
+
+private:
+    struct Trees;
+    std::unique_ptr<Trees> trees_;
+    double dx_ = 1.0, invDx_ = 1.0, baseShift_ = 0.5;
+    int stencilWidth_ = 3;
+    std::vector<LeafView> leaves_;
+    std::vector<uint32_t> particleLeaves_;
+    std::array<std::vector<uint32_t>, 8> colors_;
+    std::vector<std::array<uint32_t, 8>> neighbours_;
+    std::vector<uint32_t> leafIdScratch_;
+    std::vector<uint32_t> histogram_;
+    std::vector<uint8_t> hasParticles_;
+};
+
+}  // namespace mpm
