@@ -20,15 +20,23 @@ constexpr std::size_t kScanGrain = 4096;
 constexpr std::size_t kMaxSortChunks = 64;
 constexpr std::size_t kMinSortChunkSize = 2048;
 
+// Value trees keep OpenVDB's 8^3 leaves with smaller internal nodes than the 5-4-3 default: a 32^3
+// internal node costs 0.3-0.5 MB per tree for every occupied 4096^3 region, which would dominate small scenes.
+using MassTree = openvdb::tree::Tree4<float, 4, 3, 3>::Type;
+using MomentumTree = openvdb::tree::Tree4<openvdb::Vec3s, 4, 3, 3>::Type;
+// Coarse trees hold one voxel per grid leaf.
+using LeafIndexTree = openvdb::tree::Tree4<int32_t, 3, 3, 3>::Type;
+using LeafMaskTree = openvdb::tree::Tree4<openvdb::ValueMask, 3, 3, 3>::Type;
+
 /// Collects the set of leaf coordinates (base node >> 3) that hold particles.
 struct LeafCollector {
     const std::vector<Vec3d>& x;
     const SparseGrid& grid;
-    openvdb::MaskTree tree;
+    LeafMaskTree tree;
     LeafCollector(const std::vector<Vec3d>& xs, const SparseGrid& g) : x(xs), grid(g) {}
     LeafCollector(LeafCollector& o, tbb::split) : x(o.x), grid(o.grid) {}
     void operator()(const tbb::blocked_range<std::size_t>& r) {
-        openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(tree);
+        openvdb::tree::ValueAccessor<LeafMaskTree> acc(tree);
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3i b = grid.baseNode(x[i]);
             acc.setValueOn(openvdb::Coord(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2));
@@ -39,11 +47,11 @@ struct LeafCollector {
 }  // namespace
 
 struct SparseGrid::Trees {
-    openvdb::FloatTree mass{0.0f};
-    openvdb::Vec3STree momentum{openvdb::Vec3s(0.0f)};
-    openvdb::Int32Tree leafIndex{-1};  ///< one voxel per grid leaf, at its leaf coordinate
-    openvdb::MaskTree particleLeaves;  ///< leaf coordinates that hold particles
-    openvdb::MaskTree gridLeaves;      ///< particle leaves dilated by one towards +x, +y, +z
+    MassTree mass{0.0f};
+    MomentumTree momentum{openvdb::Vec3s(0.0f)};
+    LeafIndexTree leafIndex{-1};  ///< one voxel per grid leaf, at its leaf coordinate
+    LeafMaskTree particleLeaves;  ///< leaf coordinates that hold particles
+    LeafMaskTree gridLeaves;      ///< particle leaves dilated by one towards +x, +y, +z
 };
 
 SparseGrid::SparseGrid() : trees_(std::make_unique<Trees>()) { openvdb::initialize(); }
@@ -73,7 +81,7 @@ void SparseGrid::rebuild(std::vector<BinRequest>& requests) {
     //    because the stencil (3 or 4 nodes) is narrower than a leaf (8 nodes).
     t.gridLeaves.clear();
     {
-        openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(t.gridLeaves);
+        openvdb::tree::ValueAccessor<LeafMaskTree> acc(t.gridLeaves);
         for (auto it = t.particleLeaves.cbeginValueOn(); it; ++it) {
             const openvdb::Coord c = it.getCoord();
             for (int d = 0; d < 8; ++d) acc.setValueOn(c.offsetBy(d >> 2, (d >> 1) & 1, d & 1));
@@ -100,9 +108,9 @@ void SparseGrid::rebuild(std::vector<BinRequest>& requests) {
     leaves_.clear();
     hasParticles_.clear();
     {
-        openvdb::tree::ValueAccessor<openvdb::Int32Tree> idx(t.leafIndex);
-        openvdb::tree::ValueAccessor<openvdb::FloatTree> massAcc(t.mass);
-        openvdb::tree::ValueAccessor<openvdb::Vec3STree> momAcc(t.momentum);
+        openvdb::tree::ValueAccessor<LeafIndexTree> idx(t.leafIndex);
+        openvdb::tree::ValueAccessor<MassTree> massAcc(t.mass);
+        openvdb::tree::ValueAccessor<MomentumTree> momAcc(t.momentum);
         for (auto it = t.gridLeaves.cbeginValueOn(); it; ++it) {
             const openvdb::Coord c = it.getCoord();
             const openvdb::Coord origin(c.x() << kLeafLog2, c.y() << kLeafLog2, c.z() << kLeafLog2);
@@ -126,7 +134,7 @@ void SparseGrid::rebuild(std::vector<BinRequest>& requests) {
     for (auto& c : colors_) c.clear();
     neighbours_.resize(L);
     {
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> idx(t.leafIndex);
+        openvdb::tree::ValueAccessor<const LeafIndexTree> idx(t.leafIndex);
         for (uint32_t l = 0; l < L; ++l) {
             if (!hasParticles_[l]) continue;
             particleLeaves_.push_back(l);
@@ -149,7 +157,7 @@ void SparseGrid::rebuild(std::vector<BinRequest>& requests) {
         const std::size_t chunkSize = (N + chunks - 1) / chunks;
         histogram_.assign(chunks * L, 0);
         tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-            openvdb::tree::ValueAccessor<const openvdb::Int32Tree> idx(t.leafIndex);
+            openvdb::tree::ValueAccessor<const LeafIndexTree> idx(t.leafIndex);
             uint32_t* hist = histogram_.data() + c * L;
             const std::size_t end = std::min(N, (c + 1) * chunkSize);
             for (std::size_t i = c * chunkSize; i < end; ++i) {

@@ -1,0 +1,119 @@
+#include "io/Sampling.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <unordered_map>
+
+namespace mpm {
+
+namespace {
+void bounds(const ShapeDesc& s, Vec3d& lo, Vec3d& hi) {
+    if (s.kind == ShapeDesc::Kind::Box) {
+        lo = s.min;
+        hi = s.max;
+    } else {
+        lo = s.centre - Vec3d::Constant(s.radius);
+        hi = s.centre + Vec3d::Constant(s.radius);
+    }
+}
+
+std::vector<Vec3d> jitteredGrid(const ShapeDesc& shape, double spacing, unsigned seed) {
+    Vec3d lo, hi;
+    bounds(shape, lo, hi);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> jitter(-kGridJitter * spacing, kGridJitter * spacing);
+    std::vector<Vec3d> out;
+    const Vec3i n = ((hi - lo) / spacing).array().ceil().cast<int>();
+    for (int i = 0; i < n[0]; ++i)
+        for (int j = 0; j < n[1]; ++j)
+            for (int k = 0; k < n[2]; ++k) {
+                const Vec3d x = lo + (Vec3d(i, j, k) + Vec3d::Constant(0.5)) * spacing + Vec3d(jitter(rng), jitter(rng), jitter(rng));
+                if (shape.contains(x)) out.push_back(x);
+            }
+    return out;
+}
+}  // namespace
+
+std::vector<Vec3d> poissonDisk(const ShapeDesc& shape, double r, unsigned seed) {
+    Vec3d lo, hi;
+    bounds(shape, lo, hi);
+    // Background grid of cell r / sqrt(3): each cell holds at most one sample.
+    const double cell = r / std::sqrt(3.0);
+    const Vec3i dims = ((hi - lo) / cell).array().ceil().cast<int>().max(1);
+    const long long cells = (long long)dims[0] * dims[1] * dims[2];
+    std::vector<int32_t> grid(std::size_t(cells), -1);
+    auto cellOf = [&](const Vec3d& x) {
+        return ((x - lo) / cell).array().floor().cast<int>().min(dims.array() - 1).max(0).matrix().eval();
+    };
+    auto flat = [&](const Vec3i& c) { return (std::size_t(c[0]) * dims[1] + c[1]) * dims[2] + c[2]; };
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    std::vector<Vec3d> samples, inside;
+    std::vector<int32_t> active;
+    auto accept = [&](const Vec3d& x) {
+        grid[flat(cellOf(x))] = int32_t(samples.size());
+        active.push_back(int32_t(samples.size()));
+        samples.push_back(x);
+    };
+    // Seeds: the first point inside the shape from a few random tries (disconnected shapes do not occur).
+    for (int tries = 0; tries < 1000 && samples.empty(); ++tries) {
+        const Vec3d x = lo + Vec3d(u01(rng), u01(rng), u01(rng)).cwiseProduct(hi - lo);
+        if (shape.contains(x)) accept(x);
+    }
+    while (!active.empty()) {
+        const std::size_t pick = std::size_t(u01(rng) * active.size()) % active.size();
+        const Vec3d centre = samples[active[pick]];
+        bool found = false;
+        for (int a = 0; a < kPoissonAttempts && !found; ++a) {
+            // Uniform in the spherical shell [r, 2r).
+            Vec3d dir(u01(rng) * 2 - 1, u01(rng) * 2 - 1, u01(rng) * 2 - 1);
+            const double len = dir.norm();
+            if (len < 1e-9 || len > 1.0) continue;
+            const double rad = r * std::cbrt(1.0 + 7.0 * u01(rng));
+            const Vec3d x = centre + dir / len * rad;
+            if ((x.array() < lo.array()).any() || (x.array() >= hi.array()).any() || !shape.contains(x)) continue;
+            const Vec3i c = cellOf(x);
+            bool clear = true;
+            for (int i = std::max(0, c[0] - 2); clear && i <= std::min(dims[0] - 1, c[0] + 2); ++i)
+                for (int j = std::max(0, c[1] - 2); clear && j <= std::min(dims[1] - 1, c[1] + 2); ++j)
+                    for (int k = std::max(0, c[2] - 2); clear && k <= std::min(dims[2] - 1, c[2] + 2); ++k) {
+                        const int32_t s = grid[flat(Vec3i(i, j, k))];
+                        if (s >= 0 && (samples[s] - x).squaredNorm() < r * r) clear = false;
+                    }
+            if (clear) {
+                accept(x);
+                found = true;
+            }
+        }
+        if (!found) {
+            active[pick] = active.back();
+            active.pop_back();
+        }
+    }
+    return samples;
+}
+
+std::vector<Vec3d> sampleShape(const ShapeDesc& shape, double dx, double particlesPerCell, long long count,
+                               Sampling method, unsigned seed) {
+    const double perVolume = count > 0 ? double(count) / shape.volume() : particlesPerCell / (dx * dx * dx);
+    std::vector<Vec3d> pts;
+    if (method == Sampling::Grid) {
+        double spacing = std::cbrt(1.0 / perVolume);
+        pts = jitteredGrid(shape, spacing, seed);
+        // A sphere may hold slightly fewer lattice points than asked: refine until there are enough.
+        while (count > 0 && (long long)pts.size() < count) pts = jitteredGrid(shape, spacing *= 0.97, seed);
+    } else {
+        double r = std::cbrt(1.0 / (kPoissonPacking * perVolume));
+        pts = poissonDisk(shape, r, seed);
+        while (count > 0 && (long long)pts.size() < count) pts = poissonDisk(shape, r *= 0.95, seed);
+    }
+    if (count > 0 && (long long)pts.size() > count) {
+        std::mt19937 rng(seed ^ 0x9e3779b9u);
+        std::shuffle(pts.begin(), pts.end(), rng);
+        pts.resize(std::size_t(count));
+    }
+    return pts;
+}
+
+}  // namespace mpm

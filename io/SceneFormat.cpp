@@ -1,0 +1,82 @@
+// The scene format's reference, printed by `mpm validate --explain` and saved as docs/scene-format.md.
+// Keep it in step with io/Scene.cpp, which holds the same defaults in code.
+#include <string>
+
+#include "io/Scene.h"
+
+namespace mpm {
+
+std::string explainSceneFormat() {
+    std::string presets;
+    for (const std::string& p : materialPresetNames()) presets += (presets.empty() ? "" : ", ") + p;
+    return R"(# Scene format
+
+A scene is one JSON object with the keys `simulation`, `output`, `sets` (required, at least one) and
+`colliders`. Units are SI (m, s, kg, Pa). **Y is up** (as in Houdini); gravity defaults to (0, -9.81, 0).
+Unknown keys are errors. `mpm validate SCENE` prints the scene with every default filled in.
+
+## simulation
+| key | default | allowed | meaning |
+|---|---|---|---|
+| frames | 48 | 1 .. 1e6 | frames to simulate |
+| fps | 24 | > 0 | frames per second |
+| substeps | 20 | >= 1 | substeps per frame: target dt = 1 / (fps * substeps) |
+| dx | 0.02 | > 0 | grid spacing [m] |
+| gravity | [0, -9.81, 0] | 3 numbers | [m/s^2] |
+| interpolation | quadratic | quadratic, cubic | B-spline kernel |
+| transfer | apic | apic, pic | velocity transfer (PIC is dissipative) |
+| force | standard | standard, mls | stress force: grad w (thesis 3.24) or MLS-MPM fused (Hu et al. 2018) |
+| cfl | 0.5 | 0.001 .. 10 | C in dt <= C dx / (c + max speed), c the fastest wave speed |
+| adaptive | true | true, false | apply the CFL bound (off: fixed target dt) |
+| max_displacement | 0 | 0 .. 100 | thesis rule: largest grid-node displacement per substep in cells; 0 = off |
+| threads | 0 | >= 0 | worker threads; 0 = all cores (`--threads` overrides) |
+
+## output
+| key | default | allowed | meaning |
+|---|---|---|---|
+| directory | out/<scene name> | path | where frames go (`-o` overrides) |
+| points | true | bool | VDB PointDataGrid `points`: P, v, id, material, set |
+| surface | true | bool | narrow-band level set `surface` from the particles |
+| density | false | bool | fog volume `density` (from the surface) |
+| velocity | false | bool | vector grid `vel` (mean particle velocity per voxel) |
+| split_files | false | bool | points in `<scene>_points_NNNN.vdb`, volumes in `<scene>_NNNN.vdb` (Blender and pyopenvdb cannot read points) |
+| ply | false | bool | binary PLY `<scene>_NNNN.ply` with x, y, z, vx, vy, vz, id (Blender imports it) |
+| surface_radius | 1.0 | 0.5 .. 10 | sphere radius in particle spacings |
+| surface_group | all | all, material, set | one `surface` grid, or `surface_<material>` / `surface_<set>` per group |
+
+## sets (particle sets; each is emitted as a whole at its emission frames)
+| key | default | allowed | meaning |
+|---|---|---|---|
+| name | set<i> | unique string | |
+| material | water | )" + presets + R"( | material preset |
+| material_params | {} | see below | overrides of the preset's parameters |
+| shape | box | {type: box, min, max} or {type: sphere, center, radius} | region filled with particles |
+| velocity | [0, 0, 0] | 3 numbers | initial velocity [m/s] |
+| particles_per_cell | 8 | > 0 | sampling density in particles per dx^3 |
+| count | 0 | >= 0 | exact particle count (overrides particles_per_cell when > 0) |
+| sampling | poisson | poisson, grid | Bridson Poisson-disk, or a jittered lattice |
+| start_frame | 0 | >= 0 | first emission |
+| duration | 1 | >= 1 | emissions happen during [start_frame, start_frame + duration) |
+| pause | 0 | >= 0 | frames skipped between two emissions (a stream: 0; repeated throws: > 0) |
+| lambda_scale, mu_scale | 1 | >= 0 | scale the preset's Lame parameters (water: lambda_scale scales k) |
+| mass_scale | 1 | > 0 | scale particle mass |
+| seed | set index + 1 | integer | sampling seed |
+
+Particle volume is the shape volume divided by the particle count; mass is volume times density.
+
+### material presets and their parameters (`material_params`)
+- **water**: density 1000 kg/m^3, bulk_modulus 5e4 Pa, gamma 4 (the thesis's k = 50 at rho = 1, scaled
+  with the density so that the sound speed sqrt(k gamma / rho) = 14.1 m/s is the same).
+
+## colliders
+| key | default | allowed | meaning |
+|---|---|---|---|
+| type | plane | plane, sphere | |
+| point, normal | [0,0,0], [0,1,0] | 3 numbers | plane through point; material stays on the normal's side |
+| center, radius | required | | sphere |
+| boundary | slip | sticky, slip, separate | sticky: stop; slip: remove normal velocity; separate: only when moving in |
+| friction | 0 | >= 0 | Coulomb coefficient (slip and separate) |
+)";
+}
+
+}  // namespace mpm

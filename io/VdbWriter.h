@@ -1,0 +1,44 @@
+#pragma once
+// Per-frame VDB output for Houdini and Blender: a PointDataGrid "points" (P fixed-point, v, id, material,
+// set), narrow-band level sets "surface" built from the particles with OpenVDB's own rasteriser, and
+// optionally a fog volume "density" and a velocity grid "vel". OpenVDB's heavy headers live only in
+// VdbWriter.cpp.
+#include <string>
+#include <vector>
+
+#include "core/Species.h"
+
+namespace mpm {
+
+struct SurfaceGroup {
+    std::string gridName;      ///< "surface", or "surface_<material or set>"
+    std::vector<int> species;  ///< species that make up this surface
+};
+
+struct VdbFrameRequest {
+    std::string volumePath;    ///< file for surface/density/vel (and points unless pointsPath is set)
+    std::string pointsPath;    ///< separate file for points, empty to keep them with the volumes
+    bool points = true, surface = true, density = false, velocity = false;
+    double pointVoxelSize = 0.02;    ///< VDB points voxel (Houdini's default is ~8 points per voxel)
+    double surfaceVoxelSize = 0.01;
+    double surfaceRadius = 0.01;     ///< world-space sphere radius
+    std::vector<SurfaceGroup> surfaces;
+    std::vector<int> materialOfSpecies;  ///< index into materialNames
+    std::vector<std::string> materialNames, setNames;
+};
+
+/// Writes the requested grids atomically. Returns the number of particles written.
+std::size_t writeVdbFrame(const VdbFrameRequest& request, const std::vector<AnySpecies>& species);
+
+/// Reads back the "points" grid of a file: positions, velocities and ids (for tests and tools).
+struct PointsReadBack {
+    std::vector<Vec3d> x;
+    std::vector<Vec3f> v;
+    std::vector<int32_t> id, material, set;
+};
+PointsReadBack readVdbPoints(const std::string& path);
+
+/// Names of the grids in a VDB file.
+std::vector<std::string> vdbGridNames(const std::string& path);
+
+}  // namespace mpm

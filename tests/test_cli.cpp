@@ -1,0 +1,77 @@
+// The mpm program: exit codes (0 ok, 2 bad input, 1 failed run) and that a blow-up is caught and
+// reported instead of written to disk.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+struct Result {
+    int code;
+    std::string output;
+};
+
+Result runMpm(const std::string& args) {
+    const std::string log = (fs::temp_directory_path() / ("mpm_cli_" + std::to_string(::getpid()) + ".log")).string();
+    const int status = std::system((std::string(MPM_BINARY) + " " + args + " > " + log + " 2>&1").c_str());
+    std::ifstream in(log);
+    return {WEXITSTATUS(status), std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>())};
+}
+
+std::string sceneFile(const std::string& name, const std::string& text) {
+    const fs::path dir = fs::temp_directory_path() / ("mpm_cli_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    std::ofstream((dir / name).string()) << text;
+    return (dir / name).string();
+}
+}  // namespace
+
+TEST(Cli, ValidateShippedScenesAndBadInput) {
+    for (const auto& e : fs::directory_iterator(std::string(MPM_SOURCE_DIR) + "/scenes")) {
+        const Result r = runMpm("validate " + e.path().string());
+        EXPECT_EQ(r.code, 0) << e.path() << "\n" << r.output;
+    }
+    const Result bad = runMpm("validate " + sceneFile("bad.json", R"({"sets":[{"material":"wter"}]})"));
+    EXPECT_EQ(bad.code, 2);
+    EXPECT_NE(bad.output.find("bad.json: /sets/0/material: unknown material \"wter\""), std::string::npos) << bad.output;
+    EXPECT_EQ(runMpm("run /nonexistent/scene.json").code, 2);
+    EXPECT_EQ(runMpm("run").code, 2);
+    EXPECT_EQ(runMpm("validate --explain").code, 0);
+}
+
+TEST(Cli, RunWritesFramesAndStats) {
+    const std::string scene = sceneFile("tiny.json", R"({
+      "simulation": { "frames": 2, "dx": 0.05, "substeps": 2 },
+      "output": { "surface": false },
+      "sets": [ { "material": "water", "shape": { "type": "box", "min": [0,0,0], "max": [0.2,0.2,0.2] } } ],
+      "colliders": [ { "type": "plane" } ] })");
+    const std::string out = (fs::temp_directory_path() / ("mpm_cli_out_" + std::to_string(::getpid()))).string();
+    const Result r = runMpm("run " + scene + " -o " + out + " --threads 2 --quiet");
+    EXPECT_EQ(r.code, 0) << r.output;
+    EXPECT_TRUE(fs::exists(out + "/tiny_0000.vdb"));
+    EXPECT_TRUE(fs::exists(out + "/tiny_0002.vdb"));
+    std::ifstream csv(out + "/stats.csv");
+    int lines = 0;
+    for (std::string line; std::getline(csv, line);) ++lines;
+    EXPECT_EQ(lines, 4);  // header + frames 0, 1, 2
+}
+
+TEST(Cli, UnstableRunIsCaughtNotWritten) {
+    // CFL 5 with a stiff material is far past the explicit stability bound.
+    const std::string scene = sceneFile("blowup.json", R"({
+      "simulation": { "frames": 10, "dx": 0.05, "substeps": 1, "cfl": 5 },
+      "output": { "surface": false },
+      "sets": [ { "material": "water", "material_params": { "bulk_modulus": 1e9 },
+                  "shape": { "type": "box", "min": [0,0,0], "max": [0.3,0.3,0.3] } } ],
+      "colliders": [ { "type": "plane" } ] })");
+    const std::string out = (fs::temp_directory_path() / ("mpm_cli_blow_" + std::to_string(::getpid()))).string();
+    const Result r = runMpm("run " + scene + " -o " + out + " --quiet");
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_NE(r.output.find("simulation stopped"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("particle id"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out + "/blowup_0010.vdb"));
+}
