@@ -45,7 +45,9 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
             P.volume0.resize(n0 + n, volume);
             P.set.resize(n0 + n, set);
             for (std::size_t i = 0; i < n; ++i) P.id.push_back(nextId_++);
-            sp.state.appendRest(n);
+            // A model whose rest state depends on its parameters (sand's cone) takes them.
+            if constexpr (requires { sp.state.appendRest(n, sp.params); }) sp.state.appendRest(n, sp.params);
+            else sp.state.appendRest(n);
             for (std::size_t i = n0; i < n0 + n; ++i)
                 minStiffnessKey_[s] = std::min(minStiffnessKey_[s], M::stiffnessKey(sp.state, i));
         },

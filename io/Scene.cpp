@@ -151,10 +151,31 @@ private:
 constexpr double kHuge = 1e12;
 constexpr double kTiny = 1e-12;
 
-/// Lame parameters from Young's modulus and Poisson's ratio (thesis eq. 4.4).
-void lame(double E, double nu, float& mu, float& lambda) {
-    mu = float(E / (2.0 * (1.0 + nu)));
-    lambda = float(E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)));
+/// Defaults of the elastic presets (thesis Fig. 6.1): E and nu per model.
+template <class M> struct ElasticDefaults;
+template <> struct ElasticDefaults<FixedCorotated> { static constexpr double E = 1.4e5, nu = 0.2; };
+template <> struct ElasticDefaults<NeoHookean> { static constexpr double E = 1.4e5, nu = 0.2; };
+template <> struct ElasticDefaults<Snow> { static constexpr double E = 1.4e5, nu = 0.2; };
+template <> struct ElasticDefaults<Sand> { static constexpr double E = 3.537e7, nu = 0.2; };
+
+/// Reads density, Young's modulus and Poisson's ratio (plus the model's own keys) into a species.
+template <class M>
+AnySpecies elastic(Node& n, const ParticleSetDesc& set, float& density, std::vector<std::string> extraKeys,
+                   const std::function<void(Node&, typename M::Params&)>& extra = {}) {
+    std::vector<std::string> keys = {"density", "youngs_modulus", "poisson_ratio"};
+    keys.insert(keys.end(), extraKeys.begin(), extraKeys.end());
+    n.expect(keys);
+    Species<M> s;
+    typename M::Params& p = s.params;
+    p.density = float(n.number("density", p.density, kTiny, kHuge, "kg/m^3"));
+    const double E = n.number("youngs_modulus", ElasticDefaults<M>::E, 0.0, 1e15, "Pa");
+    const double nu = n.number("poisson_ratio", ElasticDefaults<M>::nu, 0.0, 0.49);
+    const Lame l = Lame::fromYoung(E, nu);
+    p.mu = float(l.mu * set.muScale);
+    p.lambda = float(l.lambda * set.lambdaScale);
+    if (extra) extra(n, p);
+    density = p.density;
+    return AnySpecies(std::move(s));
 }
 
 /// A material preset reads its parameter overrides and builds a species for one particle set.
@@ -176,6 +197,26 @@ const std::vector<Preset>& presets() {
              p.gamma = float(n.number("gamma", p.gamma, 1.0, 20.0));
              density = p.density;
              return AnySpecies(std::move(s));
+         }},
+        {"jelly", [](Node& n, const ParticleSetDesc& set, float& density) { return elastic<FixedCorotated>(n, set, density, {}); }},
+        {"rubber", [](Node& n, const ParticleSetDesc& set, float& density) { return elastic<NeoHookean>(n, set, density, {}); }},
+        {"snow",
+         [](Node& n, const ParticleSetDesc& set, float& density) {
+             return elastic<Snow>(n, set, density, {"theta_c", "theta_s", "xi"}, [](Node& n, Snow::Params& p) {
+                 p.thetaC = float(n.number("theta_c", p.thetaC, 0.0, 1.0));
+                 p.thetaS = float(n.number("theta_s", p.thetaS, 0.0, 10.0));
+                 p.xi = float(n.number("xi", p.xi, 0.0, 100.0));
+             });
+         }},
+        {"sand",
+         [](Node& n, const ParticleSetDesc& set, float& density) {
+             return elastic<Sand>(n, set, density, {"h0", "h1", "h2", "h3", "volume_correction"}, [](Node& n, Sand::Params& p) {
+                 p.h0 = float(n.number("h0", p.h0, 0.0, 89.0, "degrees"));
+                 p.h1 = float(n.number("h1", p.h1, -89.0, 89.0, "degrees"));
+                 p.h2 = float(n.number("h2", p.h2, 0.0, 1e3));
+                 p.h3 = float(n.number("h3", p.h3, -89.0, 89.0, "degrees"));
+                 p.volumeCorrection = n.boolean("volume_correction", p.volumeCorrection);
+             });
          }},
     };
     return table;

@@ -67,6 +67,14 @@ Particle volume is the shape volume divided by the particle count; mass is volum
 ### material presets and their parameters (`material_params`)
 - **water**: density 1000 kg/m^3, bulk_modulus 5e4 Pa, gamma 4 (the thesis's k = 50 at rho = 1, scaled
   with the density so that the sound speed sqrt(k gamma / rho) = 14.1 m/s is the same).
+- **jelly** (fixed corotated) and **rubber** (neo-Hookean): density 400, youngs_modulus 1.4e5 Pa,
+  poisson_ratio 0.2. Neo-Hookean is undefined for inverted elements (J <= 0): such a run stops with the
+  particle, frame and substep named.
+- **snow** (Stomakhin 2013): as jelly plus theta_c 0.025, theta_s 0.0075, xi 10.
+- **sand** (Drucker-Prager, Klar 2016): density 2200, youngs_modulus 3.537e7, poisson_ratio 0.2,
+  h0 35, h1 9, h2 0.2, h3 10 (degrees; friction angle phi = h0 + (h1 q - h3) exp(-h2 q)),
+  volume_correction true (Tampubolon 2017).
+lambda_scale and mu_scale multiply the Lame parameters computed from E and nu.
 
 ## colliders
 | key | default | allowed | meaning |

@@ -4,7 +4,7 @@
 // struct Model {
 //     static constexpr const char* kName;
 //     struct Params { ... };                               // constant per species, SI units
-//     struct State  { vectors...; forEachArray(f); appendRest(n); };   // per-particle, only what it needs
+//     struct State  { vectors...; forEachArray(f); appendRest(n) or appendRest(n, params); };   // per-particle, only what it needs
 //     static Mat3f  kirchhoff(const Params&, const State&, size_t i);   // tau = P F^T
 //     static void   updateDeformation(const Params&, State&, size_t i, const Mat3f& gradV, float dt); // + return map
 //     static double energyDensity(const Params&, const State&, size_t i);  // per reference volume
@@ -15,11 +15,15 @@
 // @endcode
 #include <type_traits>
 
+#include "materials/FixedCorotated.h"
+#include "materials/NeoHookean.h"
+#include "materials/Sand.h"
+#include "materials/Snow.h"
 #include "materials/Water.h"
 
 namespace mpm {
 
 template <class... Ms> struct MaterialList {};
-using AllMaterials = MaterialList<Water>;
+using AllMaterials = MaterialList<Water, FixedCorotated, NeoHookean, Snow, Sand>;
 
 }  // namespace mpm

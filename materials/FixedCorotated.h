@@ -1,0 +1,58 @@
+#pragma once
+// Fixed corotated elasticity ("jelly"; Stomakhin et al. 2012; Jiang et al. 2016, eq. 49; thesis 4.6-4.8,
+// pseudocode 5). With F = U Sigma V^T and R = U V^T:
+//   Psi = mu sum_i (sigma_i - 1)^2 + lambda/2 (J - 1)^2,   P = 2 mu (F - R) + lambda (J - 1) J F^-T,
+//   tau = P F^T = 2 mu (F - R) F^T + lambda (J - 1) J I.
+#include <vector>
+
+#include "materials/Svd.h"
+
+namespace mpm {
+
+struct FixedCorotated {
+    static constexpr const char* kName = "fixed_corotated";
+
+    struct Params {
+        float density = 400.0f;  ///< thesis Fig. 6.1
+        float mu = Lame::fromYoung(1.4e5, 0.2).mu;
+        float lambda = Lame::fromYoung(1.4e5, 0.2).lambda;
+    };
+
+    struct State {
+        std::vector<Mat3f> F;
+        template <class Fn> void forEachArray(Fn&& f) { f(F); }
+        void appendRest(std::size_t n) { F.resize(F.size() + n, Mat3f::Identity()); }
+    };
+
+    template <class T>
+    static T psi(T mu, T lambda, const Mat3T<T>& F) {
+        const Svd3<T> s = svd3<T>(F);
+        const T J = s.sigma.prod();
+        return mu * (s.sigma - Vec3T<T>::Ones()).squaredNorm() + T(0.5) * lambda * (J - T(1)) * (J - T(1));
+    }
+    /// tau = P F^T, which needs no inverse and stays finite for inverted F.
+    template <class T>
+    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) {
+        const Svd3<T> s = svd3<T>(F);
+        const Mat3T<T> R = s.U * s.V.transpose();
+        const T J = s.sigma.prod();
+        return T(2) * mu * (F - R) * F.transpose() + lambda * (J - T(1)) * J * Mat3T<T>::Identity();
+    }
+    template <class T>
+    static Mat3T<T> piola(T mu, T lambda, const Mat3T<T>& F) {
+        return kirchhoffOf<T>(mu, lambda, F) * F.inverse().transpose();
+    }
+
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.F[i]); }
+    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
+        s.F[i] = (Mat3f::Identity() + dt * gradV) * s.F[i];
+    }
+    static double energyDensity(const Params& m, const State& s, std::size_t i) {
+        return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
+    }
+    static float volumeRatio(const State& s, std::size_t i) { return s.F[i].determinant(); }
+    static float stiffnessKey(const State& s, std::size_t i) { return s.F[i].determinant(); }  // finite check; c is constant
+    static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }
+};
+
+}  // namespace mpm

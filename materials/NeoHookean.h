@@ -1,0 +1,62 @@
+#pragma once
+// Compressible neo-Hookean elasticity ("rubber"; Bonet and Wood 2008; Jiang et al. 2016, eq. 48; thesis
+// 4.3, 4.5 with the erratum F^-T):
+//   Psi = mu/2 (tr(F^T F) - 3) - mu log J + lambda/2 log^2 J,   P = mu (F - F^-T) + lambda log J F^-T,
+//   tau = P F^T = mu (F F^T - I) + lambda log J I.
+// The model is undefined for J <= 0 (an inverted element). We do not clamp: stiffnessKey turns such a
+// particle non-finite, and the run stops with a message naming the particle, frame and substep.
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "materials/Svd.h"
+
+namespace mpm {
+
+struct NeoHookean {
+    static constexpr const char* kName = "neo_hookean";
+
+    struct Params {
+        float density = 400.0f;
+        float mu = Lame::fromYoung(1.4e5, 0.2).mu;
+        float lambda = Lame::fromYoung(1.4e5, 0.2).lambda;
+    };
+
+    struct State {
+        std::vector<Mat3f> F;
+        template <class Fn> void forEachArray(Fn&& f) { f(F); }
+        void appendRest(std::size_t n) { F.resize(F.size() + n, Mat3f::Identity()); }
+    };
+
+    template <class T>
+    static T psi(T mu, T lambda, const Mat3T<T>& F) {
+        const T logJ = std::log(F.determinant());
+        return T(0.5) * mu * ((F.transpose() * F).trace() - T(3)) - mu * logJ + T(0.5) * lambda * logJ * logJ;
+    }
+    template <class T>
+    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) {
+        return mu * (F * F.transpose() - Mat3T<T>::Identity()) + lambda * std::log(F.determinant()) * Mat3T<T>::Identity();
+    }
+    template <class T>
+    static Mat3T<T> piola(T mu, T lambda, const Mat3T<T>& F) {
+        const Mat3T<T> FinvT = F.inverse().transpose();
+        return mu * (F - FinvT) + lambda * std::log(F.determinant()) * FinvT;
+    }
+
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.F[i]); }
+    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
+        s.F[i] = (Mat3f::Identity() + dt * gradV) * s.F[i];
+    }
+    static double energyDensity(const Params& m, const State& s, std::size_t i) {
+        return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
+    }
+    static float volumeRatio(const State& s, std::size_t i) { return s.F[i].determinant(); }
+    /// J itself, or NaN once the element has inverted (stops the run).
+    static float stiffnessKey(const State& s, std::size_t i) {
+        const float J = s.F[i].determinant();
+        return J > 0.0f ? J : std::numeric_limits<float>::quiet_NaN();
+    }
+    static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }
+};
+
+}  // namespace mpm

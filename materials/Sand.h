@@ -1,0 +1,107 @@
+#pragma once
+// Sand: Drucker-Prager elastoplasticity (Klar et al. 2016; thesis 4.12-4.18, pseudocode 7) with Hencky
+// (log-strain) elasticity on F_E = U Sigma V^T, eps = ln Sigma:
+//   Psi = mu tr(eps^2) + lambda/2 tr(eps)^2,   tau = U (2 mu eps + lambda tr(eps) I) U^T,
+// a return map with three cases (Klar sec. 4.3.1), hardening q -> phi -> alpha (sec. 4.3.2) and the volume
+// correction of Tampubolon et al. 2017 (sec. 4.3): log volume removed by projecting to the tip is kept and
+// added back to tr(eps) on later steps, so sand that separated does not over-compress when it lands.
+#include <cmath>
+#include <vector>
+
+#include "materials/Svd.h"
+
+namespace mpm {
+
+struct Sand {
+    static constexpr const char* kName = "sand";
+    static constexpr int kDim = 3;
+
+    struct Params {
+        float density = 2200.0f;  ///< thesis Fig. 6.1
+        float mu = Lame::fromYoung(3.537e7, 0.2).mu;
+        float lambda = Lame::fromYoung(3.537e7, 0.2).lambda;
+        // Hardening phi(q) = h0 + (h1 q - h3) exp(-h2 q), in degrees (Klar et al. 2016).
+        float h0 = 35.0f, h1 = 9.0f, h2 = 0.2f, h3 = 10.0f;
+        bool volumeCorrection = true;
+    };
+
+    struct State {
+        std::vector<Mat3f> Fe;
+        std::vector<float> q;       ///< accumulated plastic strain (hardening state)
+        std::vector<float> alpha;   ///< cone coefficient from the friction angle
+        std::vector<float> logVc;   ///< volume correction: log volume to add back
+        template <class Fn> void forEachArray(Fn&& f) { f(Fe); f(q); f(alpha); f(logVc); }
+        void appendRest(std::size_t n, const Params& m) {
+            Fe.resize(Fe.size() + n, Mat3f::Identity());
+            q.resize(q.size() + n, 0.0f);
+            alpha.resize(alpha.size() + n, alphaOf(m, 0.0f));
+            logVc.resize(logVc.size() + n, 0.0f);
+        }
+    };
+
+    /// alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi)), phi from the hardening law.
+    static float frictionAngleDegrees(const Params& m, float q) { return m.h0 + (m.h1 * q - m.h3) * std::exp(-m.h2 * q); }
+    static float alphaOf(const Params& m, float q) {
+        const float s = std::sin(frictionAngleDegrees(m, q) * float(M_PI) / 180.0f);
+        return std::sqrt(2.0f / 3.0f) * 2.0f * s / (3.0f - s);
+    }
+
+    enum class Case { Elastic, Tip, Cone };
+    struct Projection {
+        Vec3f H;      ///< projected log singular values
+        float dq;     ///< hardening increment
+        Case which;
+    };
+
+    /// Klar et al. 2016, Algorithm 2 / thesis pseudocode 7: project the log strain onto the yield surface.
+    static Projection project(const Params& m, const Vec3f& eps, float alpha) {
+        const float tr = eps.sum();
+        const Vec3f dev = eps - Vec3f::Constant(tr / kDim);
+        const float devNorm = dev.norm();
+        if (tr > 0.0f) return {Vec3f::Zero(), eps.norm(), Case::Tip};  // case II: tension, to the tip
+        const float dgamma = devNorm + (kDim * m.lambda + 2.0f * m.mu) / (2.0f * m.mu) * tr * alpha;
+        if (dgamma <= 0.0f) return {eps, 0.0f, Case::Elastic};          // case I: inside the cone
+        // Case III, onto the cone. Here tr <= 0 and dgamma > 0, so devNorm > 0: Klar's "|eps_hat| = 0"
+        // test only guards this division, and pure compression (devNorm = 0) is elastic, not the tip.
+        return {eps - dgamma / devNorm * dev, dgamma, Case::Cone};
+    }
+
+    template <class T>
+    static T psi(T mu, T lambda, const Mat3T<T>& F) {
+        const Svd3<T> s = svd3<T>(F);
+        const Vec3T<T> e = s.sigma.array().abs().log().matrix();
+        return mu * e.squaredNorm() + T(0.5) * lambda * e.sum() * e.sum();
+    }
+    template <class T>
+    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) {
+        const Svd3<T> s = svd3<T>(F);
+        const Vec3T<T> e = s.sigma.array().abs().log().matrix();
+        const Vec3T<T> t = T(2) * mu * e + Vec3T<T>::Constant(lambda * e.sum());
+        return s.U * t.asDiagonal() * s.U.transpose();
+    }
+    template <class T>
+    static Mat3T<T> piola(T mu, T lambda, const Mat3T<T>& F) {
+        return kirchhoffOf<T>(mu, lambda, F) * F.inverse().transpose();
+    }
+
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.Fe[i]); }
+    static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
+        const Mat3f trial = (Mat3f::Identity() + dt * gradV) * s.Fe[i];
+        const Svd3<float> d = svd3<float>(trial);
+        Vec3f eps = d.sigma.array().abs().max(1e-12f).log().matrix();
+        if (m.volumeCorrection) eps += Vec3f::Constant(s.logVc[i] / kDim);
+        const Projection p = project(m, eps, s.alpha[i]);
+        s.Fe[i] = d.U * p.H.array().exp().matrix().asDiagonal() * d.V.transpose();
+        if (m.volumeCorrection) s.logVc[i] = eps.sum() - p.H.sum();
+        s.q[i] += p.dq;
+        s.alpha[i] = alphaOf(m, s.q[i]);
+    }
+    static double energyDensity(const Params& m, const State& s, std::size_t i) {
+        return psi<double>(m.mu, m.lambda, s.Fe[i].cast<double>());
+    }
+    static float volumeRatio(const State& s, std::size_t i) { return s.Fe[i].determinant(); }
+    static float stiffnessKey(const State& s, std::size_t i) { return s.Fe[i].determinant(); }
+    static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }
+};
+
+}  // namespace mpm

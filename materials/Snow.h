@@ -1,0 +1,64 @@
+#pragma once
+// Snow (Stomakhin et al. 2013, eq. 1-3 and sec. 7; thesis 4.9-4.11, pseudocode 6): fixed corotated
+// elasticity on the elastic part F_E with hardened Lame parameters
+//   mu = mu0 h, lambda = lambda0 h, h = exp(xi (1 - J_P)),
+// and plasticity by clamping the singular values of F_E to [1 - theta_c, 1 + theta_s] after each update;
+// the plastic volume J_P <- J_P det(F_E trial) / det(F_E) is all that is kept of F_P.
+#include <cmath>
+#include <vector>
+
+#include "materials/FixedCorotated.h"
+
+namespace mpm {
+
+struct Snow {
+    static constexpr const char* kName = "snow";
+
+    struct Params {
+        float density = 400.0f;  ///< thesis Fig. 6.1
+        float mu = Lame::fromYoung(1.4e5, 0.2).mu;
+        float lambda = Lame::fromYoung(1.4e5, 0.2).lambda;
+        float thetaC = 0.025f;   ///< critical compression
+        float thetaS = 0.0075f;  ///< critical stretch
+        float xi = 10.0f;        ///< hardening coefficient
+    };
+
+    struct State {
+        std::vector<Mat3f> Fe;
+        std::vector<float> Jp;
+        template <class Fn> void forEachArray(Fn&& f) { f(Fe); f(Jp); }
+        void appendRest(std::size_t n) {
+            Fe.resize(Fe.size() + n, Mat3f::Identity());
+            Jp.resize(Jp.size() + n, 1.0f);
+        }
+    };
+
+    static float hardening(const Params& m, float Jp) { return std::exp(m.xi * (1.0f - Jp)); }
+
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
+        const float h = hardening(m, s.Jp[i]);
+        return FixedCorotated::kirchhoffOf<float>(m.mu * h, m.lambda * h, s.Fe[i]);
+    }
+
+    /// Elastic predictor, then the return map: clamp sigma, push the clamped-away volume into J_P.
+    static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
+        const Mat3f trial = (Mat3f::Identity() + dt * gradV) * s.Fe[i];
+        Svd3<float> d = svd3<float>(trial);
+        const float Jtrial = d.sigma.prod();
+        for (int a = 0; a < 3; ++a) d.sigma[a] = std::clamp(d.sigma[a], 1.0f - m.thetaC, 1.0f + m.thetaS);
+        s.Fe[i] = d.U * d.sigma.asDiagonal() * d.V.transpose();
+        s.Jp[i] *= Jtrial / d.sigma.prod();
+    }
+    static double energyDensity(const Params& m, const State& s, std::size_t i) {
+        const double h = hardening(m, s.Jp[i]);
+        return FixedCorotated::psi<double>(m.mu * h, m.lambda * h, s.Fe[i].cast<double>());
+    }
+    static float volumeRatio(const State& s, std::size_t i) { return s.Fe[i].determinant() * s.Jp[i]; }
+    /// Hardening grows as J_P shrinks, so the smallest J_P sets the fastest wave.
+    static float stiffnessKey(const State& s, std::size_t i) { return s.Jp[i]; }
+    static float waveSpeed(const Params& m, float minJp) {
+        return elasticWaveSpeed(m.mu, m.lambda, m.density) * std::sqrt(hardening(m, minJp));
+    }
+};
+
+}  // namespace mpm
