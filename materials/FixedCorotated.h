@@ -12,17 +12,8 @@ namespace mpm {
 struct FixedCorotated {
     static constexpr const char* kName = "fixed_corotated";
 
-    struct Params {
-        float density = 400.0f;  ///< thesis Fig. 6.1
-        float mu = Lame::fromYoung(1.4e5, 0.2).mu;
-        float lambda = Lame::fromYoung(1.4e5, 0.2).lambda;
-    };
-
-    struct State {
-        std::vector<Mat3f> F;
-        template <class Fn> void forEachArray(Fn&& f) { f(F); }
-        void appendRest(std::size_t n) { F.resize(F.size() + n, Mat3f::Identity()); }
-    };
+    using Params = ElasticParams;
+    using State = DeformationGradientState;
 
     template <class T>
     static T psi(T mu, T lambda, const Mat3T<T>& F) {
@@ -44,9 +35,7 @@ struct FixedCorotated {
     }
 
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.F[i]); }
-    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
-        s.F[i] = (Mat3f::Identity() + dt * gradV) * s.F[i];
-    }
+    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) { s.update(i, gradV, dt); }
     static double energyDensity(const Params& m, const State& s, std::size_t i) {
         return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
     }

@@ -5,6 +5,8 @@
 // tiny singular values; it is the measured choice until a McAdams-style SVD beats it (issue 4 notes).
 #include <Eigen/SVD>
 
+#include <vector>
+
 #include "core/Types.h"
 
 namespace mpm {
@@ -43,5 +45,20 @@ struct Lame {
 
 /// P-wave speed sqrt((lambda + 2 mu) / rho) of an isotropic solid at rest.
 inline float elasticWaveSpeed(float mu, float lambda, float rho) { return std::sqrt((lambda + 2.0f * mu) / rho); }
+
+/// Parameters of the hyperelastic models that keep the full F (thesis Fig. 6.1 defaults: rho 400, E 1.4e5, nu 0.2).
+struct ElasticParams {
+    float density = 400.0f;
+    float mu = Lame::fromYoung(1.4e5, 0.2).mu;
+    float lambda = Lame::fromYoung(1.4e5, 0.2).lambda;
+};
+
+/// Per-particle state of those models: F alone, updated by F <- (I + dt grad v) F (thesis 3.19).
+struct DeformationGradientState {
+    std::vector<Mat3f> F;
+    template <class Fn> void forEachArray(Fn&& f) { f(F); }
+    void appendRest(std::size_t n) { F.resize(F.size() + n, Mat3f::Identity()); }
+    void update(std::size_t i, const Mat3f& gradV, float dt) { F[i] = (Mat3f::Identity() + dt * gradV) * F[i]; }
+};
 
 }  // namespace mpm
