@@ -13,19 +13,19 @@ namespace {
 constexpr std::size_t kReduceGrain = 8192;
 
 struct Sums {
-    double mass = 0, ke = 0, pe = 0, vmax = 0;
+    double mass = 0, ke = 0, pe = 0, ge = 0, vmax = 0;
     Vec3d p = Vec3d::Zero(), L = Vec3d::Zero();
     double minJ = std::numeric_limits<double>::infinity(), maxJ = -std::numeric_limits<double>::infinity();
     Sums operator+(const Sums& o) const {
         Sums s;
-        s.mass = mass + o.mass; s.ke = ke + o.ke; s.pe = pe + o.pe; s.vmax = std::max(vmax, o.vmax);
+        s.mass = mass + o.mass; s.ke = ke + o.ke; s.pe = pe + o.pe; s.ge = ge + o.ge; s.vmax = std::max(vmax, o.vmax);
         s.p = p + o.p; s.L = L + o.L; s.minJ = std::min(minJ, o.minJ); s.maxJ = std::max(maxJ, o.maxJ);
         return s;
     }
 };
 }  // namespace
 
-FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale) {
+FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale, const Vec3d& gravity) {
     Sums total;
     const double D = inertiaScale * dx * dx;
     for (const AnySpecies& s : species) {
@@ -46,6 +46,7 @@ FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, f
                                      m * Vec3d(B(2, 1) - B(1, 2), B(0, 2) - B(2, 0), B(1, 0) - B(0, 1));
                             acc.ke += 0.5 * m * v.squaredNorm();
                             acc.pe += P.volume0[i] * M::energyDensity(sp.params, sp.state, i);
+                            acc.ge -= m * gravity.dot(P.x[i]);
                             acc.vmax = std::max(acc.vmax, v.norm());
                             const double J = M::volumeRatio(sp.state, i);
                             acc.minJ = std::min(acc.minJ, J);
@@ -64,6 +65,7 @@ FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, f
     st.angularMomentum = total.L;
     st.kineticEnergy = total.ke;
     st.elasticEnergy = total.pe;
+    st.gravityEnergy = total.ge;
     st.maxSpeed = total.vmax;
     if (st.particles) {
         st.minJ = total.minJ;
@@ -74,16 +76,16 @@ FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, f
 
 std::string FrameStats::csvHeader() {
     return "frame,time,particles,mass,momentum_x,momentum_y,momentum_z,angular_momentum_x,angular_momentum_y,"
-           "angular_momentum_z,kinetic_energy,elastic_energy,max_speed,min_J,max_J,active_leaves,grid_bytes,substeps,"
-           "wall_seconds";
+           "angular_momentum_z,kinetic_energy,elastic_energy,gravity_energy,max_speed,min_J,max_J,active_leaves,grid_bytes,"
+           "substeps,retries,wall_seconds";
 }
 
 std::string FrameStats::csvRow() const {
     char buf[1024];
-    std::snprintf(buf, sizeof(buf), "%d,%.9g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%zu,%zu,%d,%.6f",
+    std::snprintf(buf, sizeof(buf), "%d,%.9g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%zu,%zu,%d,%d,%.6f",
                   frame, time, particles, mass, momentum[0], momentum[1], momentum[2], angularMomentum[0],
-                  angularMomentum[1], angularMomentum[2], kineticEnergy, elasticEnergy, maxSpeed, minJ, maxJ,
-                  activeLeaves, gridBytes, substeps, wallSeconds);
+                  angularMomentum[1], angularMomentum[2], kineticEnergy, elasticEnergy, gravityEnergy, maxSpeed,
+                  minJ, maxJ, activeLeaves, gridBytes, substeps, retries, wallSeconds);
     return buf;
 }
 

@@ -17,12 +17,17 @@ struct FrameStats {
     Vec3d angularMomentum = Vec3d::Zero();  ///< about the origin, APIC affine part included
     double kineticEnergy = 0.0;
     double elasticEnergy = 0.0;
+    double gravityEnergy = 0.0;             ///< -sum m g . x (zero at the origin)
     double maxSpeed = 0.0;
     double minJ = 1.0, maxJ = 1.0;
     std::size_t activeLeaves = 0;
     std::size_t gridBytes = 0;
     int substeps = 0;
+    int retries = 0;                        ///< times this frame was restarted with half the time step
     double wallSeconds = 0.0;
+
+    /// Kinetic + stored + gravitational: without external work and dissipation it is constant.
+    double totalEnergy() const { return kineticEnergy + elasticEnergy + gravityEnergy; }
 
     static std::string csvHeader();
     std::string csvRow() const;
@@ -30,6 +35,6 @@ struct FrameStats {
 
 /// Sums over all particles. Deterministic: a fixed-grain reduction whose split does not depend on threads.
 /// inertiaScale is D_p / dx^2 (1/4 quadratic, 1/3 cubic), for the APIC angular momentum m eps : (C D)^T.
-FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale);
+FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale, const Vec3d& gravity);
 
 }  // namespace mpm

@@ -144,8 +144,8 @@ float Simulation::updateGrid(float dt) {
 double Simulation::substep(double dtMax) {
     // Bin particles by leaf; allocate the leaves their stencils reach and release the others.
     bin();
-    // Time step: the caller's bound (target and frame end), and the CFL condition.
-    double dt = std::min(dtMax, cflTimeStep());
+    // Time step: the caller's bound (target and frame end), and the CFL condition (halved on retries).
+    double dt = std::min(dtMax, cflTimeStep() * dtScale_);
     // P2G: mass and momentum, with the stress impulse of this step folded in (thesis 3.14, 3.15, 3.24).
     particlesToGrid(grid_, species_, settings_.transfer, float(dt));
     // Grid update: v = mv/m, gravity, colliders and friction (3.20, 3.26, section 5).
@@ -158,13 +158,14 @@ double Simulation::substep(double dtMax) {
     }
     // G2P: velocity, affine velocity, deformation update with return mapping, advection (3.17-3.19, 3.21).
     const G2PSummary g2p = gridToParticles(grid_, species_, settings_.transfer, float(dt));
-    if (g2p.badParticle >= 0) {
-        const ParticleArrays& P = particlesOf(species_[g2p.badSpecies]);
-        std::ostringstream msg;
-        msg << "non-finite " << g2p.badField << " at frame " << frame_ << ", substep " << substeps_ << " (t = " << time_
-            << " s, dt = " << dt << " s): particle id " << P.id[g2p.badParticle] << " of species "
-            << std::visit([](const auto& sp) { return sp.name; }, species_[g2p.badSpecies]);
-        throw SimulationError(msg.str());
+    if (g2p.badParticle >= 0) fail(std::string("non-finite ") + g2p.badField, g2p.badSpecies, std::size_t(g2p.badParticle), dt);
+    // Advection moved every particle by dt v: more than a cell means the step outran its own stencil.
+    if (settings_.stability.cellCrossing && double(g2p.maxSpeed) * dt > settings_.dx) {
+        const auto [s, i] = fastestParticle();
+        std::ostringstream cause;
+        cause << "particle moved " << double(g2p.maxSpeed) * dt / settings_.dx << " cells in one substep (speed "
+              << g2p.maxSpeed << " m/s)";
+        fail(cause.str(), s, i, dt);
     }
     maxSpeed_ = g2p.maxSpeed;
     minStiffnessKey_ = g2p.minStiffnessKey;
@@ -173,14 +174,63 @@ double Simulation::substep(double dtMax) {
     return dt;
 }
 
-FrameStats Simulation::advanceFrame() {
-    const auto start = std::chrono::steady_clock::now();
-    emitDue();
+void Simulation::fail(const std::string& cause, int s, std::size_t i, double dt) const {
+    std::ostringstream msg;
+    msg << cause << " at frame " << frame_ << ", substep " << substeps_ << " (t = " << time_ << " s, dt = " << dt
+        << " s): particle id " << particlesOf(species_[s]).id[i] << " of species "
+        << std::visit([](const auto& sp) { return sp.name; }, species_[s]);
+    throw SimulationError(msg.str());
+}
+
+std::pair<int, std::size_t> Simulation::fastestParticle() const {
+    std::pair<int, std::size_t> best{0, 0};
+    float vmax = -1.0f;
+    for (std::size_t s = 0; s < species_.size(); ++s) {
+        const ParticleArrays& P = particlesOf(species_[s]);
+        for (std::size_t i = 0; i < P.size(); ++i)
+            if (P.v[i].squaredNorm() > vmax) vmax = P.v[i].squaredNorm(), best = {int(s), i};
+    }
+    return best;
+}
+
+void Simulation::resetEnergyReference(const FrameStats& st) {
+    energyReferenceSet_ = true;
+    energyMin_ = st.totalEnergy();
+    energyScale_ = std::max(energyScale_, st.kineticEnergy + st.elasticEnergy);
+}
+
+void Simulation::checkEnergy(const FrameStats& st) {
+    const double limit = settings_.stability.energyGrowth;
+    energyScale_ = std::max(energyScale_, st.kineticEnergy + st.elasticEnergy);
+    // A body at rest has almost no kinetic energy: the floor of the scale is its weight over one cell.
+    const double scale = energyScale_ + st.mass * settings_.gravity.norm() * settings_.dx;
+    const double rise = st.totalEnergy() - energyMin_;
+    if (limit > 0.0 && particleCount() > 0 && rise > limit * scale) {
+        const auto [s, i] = fastestParticle();
+        std::ostringstream cause;
+        cause << "total energy rose by " << rise << " J without external work (" << 100.0 * rise / scale
+              << "% of the largest kinetic + stored energy; the limit is " << 100.0 * limit << "%); fastest";
+        fail(cause.str(), s, i, 0.0);
+    }
+    energyMin_ = std::min(energyMin_, st.totalEnergy());
+}
+
+/// What a retry restores: every particle and the clocks. The grid is rebuilt from particles each substep.
+struct Simulation::Snapshot {
+    std::vector<AnySpecies> species;
+    double time;
+    long long substeps;
+    float maxSpeed;
+    std::vector<float> minStiffnessKey;
+    double energyMin, energyScale;
+};
+
+int Simulation::runFrameSubsteps() {
     const double frameEnd = double(frame_ + 1) / settings_.fps;
     int steps = 0;
     while (time_ < frameEnd) {
         const double remaining = frameEnd - time_;
-        const double dtMax = std::min(settings_.targetDt(), cflTimeStep());
+        const double dtMax = std::min(settings_.targetDt(), cflTimeStep()) * dtScale_;
         // Split the rest of the frame into equal substeps so that the last one lands on the frame time.
         const double pieces = std::max(1.0, std::ceil(remaining / dtMax - kFrameSplitSlack));
         const double dt = remaining / pieces;
@@ -188,16 +238,60 @@ FrameStats Simulation::advanceFrame() {
         ++steps;
         if (pieces == 1.0 && taken == dt) time_ = frameEnd;
     }
-    ++frame_;
+    return steps;
+}
+
+FrameStats Simulation::advanceFrame() {
+    const auto start = std::chrono::steady_clock::now();
     emitDue();
-    FrameStats st = measure();
+    if (!energyReferenceSet_) resetEnergyReference(measure());
+    std::unique_ptr<Snapshot> snap;
+    if (settings_.stability.retries > 0)
+        snap.reset(new Snapshot{species_, time_, substeps_, maxSpeed_, minStiffnessKey_, energyMin_, energyScale_});
+    int steps = 0, retries = 0;
+    FrameStats st;
+    for (;;) {
+        try {
+            steps = runFrameSubsteps();
+            st = measure();
+            checkEnergy(st);
+            break;
+        } catch (const SimulationError& e) {
+            if (retries >= settings_.stability.retries) {
+                dtScale_ = 1.0;
+                throw;
+            }
+            // Restart the frame from its start with half the time step.
+            species_ = snap->species;
+            time_ = snap->time;
+            substeps_ = snap->substeps;
+            maxSpeed_ = snap->maxSpeed;
+            minStiffnessKey_ = snap->minStiffnessKey;
+            energyMin_ = snap->energyMin;
+            energyScale_ = snap->energyScale;
+            dtScale_ *= 0.5;
+            ++retries;
+            ++retriesTotal_;
+        }
+    }
+    dtScale_ = 1.0;
+    ++frame_;
+    const std::size_t before = particleCount();
+    emitDue();
+    if (particleCount() != before) {
+        // New material brings its own energy: measure again and restart the growth reference.
+        st = measure();
+        resetEnergyReference(st);
+    }
+    st.frame = frame_;
     st.substeps = steps;
+    st.retries = retries;
     st.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return st;
 }
 
 FrameStats Simulation::measure() const {
-    FrameStats st = measureParticles(species_, settings_.dx, kernelInertiaScale());
+    FrameStats st = measureParticles(species_, settings_.dx, kernelInertiaScale(), settings_.gravity);
     st.frame = frame_;
     st.time = time_;
     st.activeLeaves = grid_.leafCount();

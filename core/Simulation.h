@@ -16,6 +16,17 @@
 
 namespace mpm {
 
+/// Blow-up detection (ALGORITHM.md, "Stability"). A check that fires stops the run with its cause, frame,
+/// substep and particle, or, with retries > 0, restarts the frame from its start with half the time step.
+struct StabilitySettings {
+    bool cellCrossing = true;   ///< a particle moving more than one cell in a substep breaks the stencil
+    /// Total energy (kinetic + stored + gravity) may not rise above its lowest value since the last emission
+    /// by more than this fraction of the largest kinetic + stored energy seen; 0 = off. Colliders are static
+    /// and dissipative, so without emission nothing does positive work.
+    double energyGrowth = 0.5;
+    int retries = 0;            ///< restarts of a failed frame, each halving the time step; 0 = stop at once
+};
+
 struct SimulationSettings {
     double dx = 0.02;                         ///< grid spacing [m]
     Vec3d gravity = Vec3d(0.0, -9.81, 0.0);   ///< Y is up, as in Houdini [m/s^2]
@@ -25,6 +36,7 @@ struct SimulationSettings {
     bool adaptive = true;                     ///< also bound dt by the CFL condition
     double cfl = 0.5;                         ///< C in dt <= C dx / (c + |v|max)
     double maxDisplacement = 0.0;             ///< thesis rule: max node displacement per substep in cells; 0 = off
+    StabilitySettings stability;
 
     double targetDt() const { return 1.0 / (fps * substepsPerFrame); }
 };
@@ -65,6 +77,7 @@ public:
     /// Emits the particle sets due at the current frame, once.
     void emitDue();
     /// Runs substeps to the next frame time, then emits what is due there. Returns that frame's stats.
+    /// Throws SimulationError when a stability check fires and no retry is left.
     FrameStats advanceFrame();
     /// One substep no longer than dtMax (and the CFL bound); returns the step taken.
     double substep(double dtMax);
@@ -79,10 +92,17 @@ public:
     double time() const { return time_; }
     int frame() const { return frame_; }
     long long substepCount() const { return substeps_; }
+    int retryCount() const { return retriesTotal_; }
     std::size_t particleCount() const;
     float kernelInertiaScale() const;
 
 private:
+    struct Snapshot;
+    int runFrameSubsteps();
+    void checkEnergy(const FrameStats& st);
+    void resetEnergyReference(const FrameStats& st);
+    [[noreturn]] void fail(const std::string& cause, int species, std::size_t particle, double dt) const;
+    std::pair<int, std::size_t> fastestParticle() const;
     void bin();
     float updateGrid(float dt);
     template <class S> void permute(S& species, const std::vector<uint32_t>& destination);
@@ -100,6 +120,11 @@ private:
     int emittedFrame_ = -1;
     long long substeps_ = 0;
     int32_t nextId_ = 0;
+    double dtScale_ = 1.0;          ///< halved on each retry of the current frame
+    int retriesTotal_ = 0;
+    bool energyReferenceSet_ = false;
+    double energyMin_ = 0.0;        ///< lowest total energy since the last emission
+    double energyScale_ = 0.0;      ///< largest kinetic + stored energy seen
     std::tuple<std::vector<Vec3d>, std::vector<Vec3f>, std::vector<Mat3f>, std::vector<float>, std::vector<int32_t>,
                std::vector<uint16_t>>
         scratch_;

@@ -18,11 +18,11 @@ void bounds(const ShapeDesc& s, Vec3d& lo, Vec3d& hi) {
     }
 }
 
-std::vector<Vec3d> jitteredGrid(const ShapeDesc& shape, double spacing, unsigned seed) {
+std::vector<Vec3d> jitteredGrid(const ShapeDesc& shape, double spacing, double jitterFraction, unsigned seed) {
     Vec3d lo, hi;
     bounds(shape, lo, hi);
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> jitter(-kGridJitter * spacing, kGridJitter * spacing);
+    std::uniform_real_distribution<double> jitter(-jitterFraction * spacing, jitterFraction * spacing);
     std::vector<Vec3d> out;
     const Vec3i n = ((hi - lo) / spacing).array().ceil().cast<int>();
     for (int i = 0; i < n[0]; ++i)
@@ -98,11 +98,12 @@ std::vector<Vec3d> sampleShape(const ShapeDesc& shape, double dx, double particl
                                Sampling method, unsigned seed) {
     const double perVolume = count > 0 ? double(count) / shape.volume() : particlesPerCell / (dx * dx * dx);
     std::vector<Vec3d> pts;
-    if (method == Sampling::Grid) {
+    if (method != Sampling::Poisson) {
+        const double jitter = method == Sampling::Grid ? kGridJitter : 0.0;
         double spacing = std::cbrt(1.0 / perVolume);
-        pts = jitteredGrid(shape, spacing, seed);
+        pts = jitteredGrid(shape, spacing, jitter, seed);
         // A sphere may hold slightly fewer lattice points than asked: refine until there are enough.
-        while (count > 0 && (long long)pts.size() < count) pts = jitteredGrid(shape, spacing *= 0.97, seed);
+        while (count > 0 && (long long)pts.size() < count) pts = jitteredGrid(shape, spacing *= 0.97, jitter, seed);
     } else {
         double r = std::cbrt(1.0 / (kPoissonPacking * perVolume));
         pts = poissonDisk(shape, r, seed);

@@ -288,7 +288,7 @@ SceneDesc loadScene(const std::string& path) {
     {
         Node n = root.child("simulation");
         n.expect({"frames", "fps", "substeps", "dx", "gravity", "interpolation", "transfer", "force", "cfl", "adaptive",
-                  "max_displacement", "threads"});
+                  "max_displacement", "threads", "energy_growth_limit", "cell_crossing_check", "retries"});
         SimulationSettings& s = scene.settings;
         scene.frames = int(n.integer("frames", scene.frames, 1, 1000000));
         s.fps = n.number("fps", s.fps, 1e-3, 1e6, "frames per second");
@@ -303,6 +303,10 @@ SceneDesc loadScene(const std::string& path) {
         s.adaptive = n.boolean("adaptive", s.adaptive);
         s.maxDisplacement = n.number("max_displacement", s.maxDisplacement, 0.0, 100.0, "cells per substep (0 = off)");
         scene.threads = int(n.integer("threads", 0, 0, 4096));
+        s.stability.energyGrowth = n.number("energy_growth_limit", s.stability.energyGrowth, 0.0, 1e6,
+                                            "(fraction of the largest kinetic + stored energy; 0 = off)");
+        s.stability.cellCrossing = n.boolean("cell_crossing_check", s.stability.cellCrossing);
+        s.stability.retries = int(n.integer("retries", s.stability.retries, 0, 10));
         n.finish();
     }
     // Output.
@@ -337,7 +341,8 @@ SceneDesc loadScene(const std::string& path) {
         d.velocity = n.vec3("velocity", Vec3d::Zero()).cast<float>();
         d.particlesPerCell = n.number("particles_per_cell", d.particlesPerCell, 1e-3, 1000.0);
         d.count = n.integer("count", 0, 0, 2000000000LL);
-        d.sampling = n.choice("sampling", "poisson", {"poisson", "grid"}, "sampling") == "grid" ? Sampling::Grid : Sampling::Poisson;
+        const std::string sampling = n.choice("sampling", "poisson", {"poisson", "grid", "lattice"}, "sampling");
+        d.sampling = sampling == "grid" ? Sampling::Grid : sampling == "lattice" ? Sampling::Lattice : Sampling::Poisson;
         d.startFrame = int(n.integer("start_frame", 0, 0, 100000000));
         d.durationFrames = int(n.integer("duration", 1, 1, 100000000));
         d.pauseFrames = int(n.integer("pause", 0, 0, 100000000));

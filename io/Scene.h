@@ -17,7 +17,7 @@ public:
     using std::runtime_error::runtime_error;
 };
 
-enum class Sampling { Poisson, Grid };
+enum class Sampling { Poisson, Grid, Lattice };
 
 struct ShapeDesc {
     enum class Kind { Box, Sphere } kind = Kind::Box;

@@ -30,6 +30,9 @@ Unknown keys are errors. `mpm validate SCENE` prints the scene with every defaul
 | adaptive | true | true, false | apply the CFL bound (off: fixed target dt) |
 | max_displacement | 0 | 0 .. 100 | thesis rule: largest grid-node displacement per substep in cells; 0 = off |
 | threads | 0 | >= 0 | worker threads; 0 = all cores (`--threads` overrides) |
+| energy_growth_limit | 0.5 | >= 0 | blow-up check: total energy (kinetic + stored + gravity) may not rise above its lowest value since the last emission by more than this fraction of the largest kinetic + stored energy seen; 0 = off |
+| cell_crossing_check | true | bool | blow-up check: stop when a particle moves more than one cell in a substep |
+| retries | 0 | 0 .. 10 | when a check fires (these two, a non-finite value, neo-Hookean J <= 0): 0 stops the run naming cause, frame, substep and particle; N restarts the frame up to N times, halving the time step each time (counted in stats.csv `retries`) |
 
 ## output
 | key | default | allowed | meaning |
@@ -54,7 +57,7 @@ Unknown keys are errors. `mpm validate SCENE` prints the scene with every defaul
 | velocity | [0, 0, 0] | 3 numbers | initial velocity [m/s] |
 | particles_per_cell | 8 | > 0 | sampling density in particles per dx^3 |
 | count | 0 | >= 0 | exact particle count (overrides particles_per_cell when > 0) |
-| sampling | poisson | poisson, grid | Bridson Poisson-disk, or a jittered lattice |
+| sampling | poisson | poisson, grid, lattice | Bridson Poisson-disk, a jittered lattice, or a regular lattice (for validation) |
 | start_frame | 0 | >= 0 | first emission |
 | duration | 1 | >= 1 | emissions happen during [start_frame, start_frame + duration) |
 | pause | 0 | >= 0 | frames skipped between two emissions (a stream: 0; repeated throws: > 0) |
