@@ -82,6 +82,9 @@ int run(const std::string& scenePath, const std::string& outDir, int threads, co
             std::fprintf(stderr, "frame %d/%d substeps %d particles %zu max_speed %.3g sim %.2fs write %.2fs pss %.3g eta %s\n", f,
                          range.last, st.substeps, st.particles, st.maxSpeed, st.wallSeconds, writer.lastWriteSeconds(), pss,
                          clock(eta).c_str());
+        if (st.retries)
+            std::fprintf(stderr, "%smpm: frame %d was restarted %d times with half the time step (stability retries)\n",
+                         tty ? "\n" : "", f, st.retries);
     }
     if (tty) std::fprintf(stderr, "\n");
     if (!quiet)

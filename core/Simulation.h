@@ -24,6 +24,9 @@ struct StabilitySettings {
     /// by more than this fraction of the largest kinetic + stored energy seen; 0 = off. Colliders are static
     /// and dissipative, so without emission nothing does positive work.
     double energyGrowth = 0.5;
+    /// The CFL step may not shrink by more than this factor in one substep (a crushed material or a flung
+    /// particle makes the step collapse and the run stall); 0 = off.
+    double stepCollapse = 100.0;
     int retries = 0;            ///< restarts of a failed frame, each halving the time step; 0 = stop at once
 };
 
@@ -103,6 +106,8 @@ private:
     void resetEnergyReference(const FrameStats& st);
     [[noreturn]] void fail(const std::string& cause, int species, std::size_t particle, double dt) const;
     std::pair<int, std::size_t> fastestParticle() const;
+    std::pair<int, std::size_t> stiffestParticle() const;
+    float volumeRatioOf(int species, std::size_t i) const;
     void bin();
     float updateGrid(float dt);
     template <class S> void permute(S& species, const std::vector<uint32_t>& destination);

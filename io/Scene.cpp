@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -269,14 +270,18 @@ const std::vector<std::string>& materialPresetNames() {
 }
 
 SceneDesc loadScene(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw SceneError(path + ": cannot open the file");
+    return parseScene(std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()), path);
+}
+
+SceneDesc parseScene(const std::string& text, const std::string& path) {
     SceneDesc scene;
     scene.file = path;
     scene.name = std::filesystem::path(path).stem().string();
-    std::ifstream in(path);
-    if (!in) throw SceneError(path + ": cannot open the file");
     json doc;
     try {
-        doc = json::parse(in);
+        doc = json::parse(text);
     } catch (const json::parse_error& e) {
         throw SceneError(path + ": not valid JSON: " + e.what());
     }
@@ -288,7 +293,8 @@ SceneDesc loadScene(const std::string& path) {
     {
         Node n = root.child("simulation");
         n.expect({"frames", "fps", "substeps", "dx", "gravity", "interpolation", "transfer", "force", "cfl", "adaptive",
-                  "max_displacement", "threads", "energy_growth_limit", "cell_crossing_check", "retries"});
+                  "max_displacement", "threads", "energy_growth_limit", "cell_crossing_check", "step_collapse_limit",
+                  "retries"});
         SimulationSettings& s = scene.settings;
         scene.frames = int(n.integer("frames", scene.frames, 1, 1000000));
         s.fps = n.number("fps", s.fps, 1e-3, 1e6, "frames per second");
@@ -306,6 +312,8 @@ SceneDesc loadScene(const std::string& path) {
         s.stability.energyGrowth = n.number("energy_growth_limit", s.stability.energyGrowth, 0.0, 1e6,
                                             "(fraction of the largest kinetic + stored energy; 0 = off)");
         s.stability.cellCrossing = n.boolean("cell_crossing_check", s.stability.cellCrossing);
+        s.stability.stepCollapse = n.number("step_collapse_limit", s.stability.stepCollapse, 0.0, 1e12,
+                                            "(largest factor by which the CFL step may shrink in one substep; 0 = off)");
         s.stability.retries = int(n.integer("retries", s.stability.retries, 0, 10));
         n.finish();
     }

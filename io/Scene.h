@@ -72,6 +72,8 @@ struct SceneDesc {
 
 /// Reads and checks a scene file. Throws SceneError.
 SceneDesc loadScene(const std::string& path);
+/// The same for scene text in memory; `path` names it in errors and gives the scene its name.
+SceneDesc parseScene(const std::string& text, const std::string& path);
 
 /// Builds a ready-to-run simulation: species, sampled particle sets (as emitters) and colliders.
 std::unique_ptr<Simulation> buildSimulation(SceneDesc& scene);

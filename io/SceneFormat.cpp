@@ -32,7 +32,8 @@ Unknown keys are errors. `mpm validate SCENE` prints the scene with every defaul
 | threads | 0 | >= 0 | worker threads; 0 = all cores (`--threads` overrides) |
 | energy_growth_limit | 0.5 | >= 0 | blow-up check: total energy (kinetic + stored + gravity) may not rise above its lowest value since the last emission by more than this fraction of the largest kinetic + stored energy seen; 0 = off |
 | cell_crossing_check | true | bool | blow-up check: stop when a particle moves more than one cell in a substep |
-| retries | 0 | 0 .. 10 | when a check fires (these two, a non-finite value, neo-Hookean J <= 0): 0 stops the run naming cause, frame, substep and particle; N restarts the frame up to N times, halving the time step each time (counted in stats.csv `retries`) |
+| step_collapse_limit | 100 | >= 0 | blow-up check: stop when the CFL time step shrinks by more than this factor in one substep (a crushed material or a flung particle would stall the run); 0 = off |
+| retries | 0 | 0 .. 10 | when a check fires (these three, a non-finite value, neo-Hookean J <= 0): 0 stops the run naming cause, frame, substep and particle; N restarts the frame up to N times, halving the time step each time (counted in stats.csv `retries`) |
 
 ## output
 | key | default | allowed | meaning |

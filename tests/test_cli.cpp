@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -31,7 +32,8 @@ std::string sceneFile(const std::string& name, const std::string& text) {
 }  // namespace
 
 TEST(Cli, ValidateShippedScenesAndBadInput) {
-    for (const auto& e : fs::directory_iterator(std::string(MPM_SOURCE_DIR) + "/scenes")) {
+    for (const auto& e : fs::recursive_directory_iterator(std::string(MPM_SOURCE_DIR) + "/scenes")) {
+        if (!e.is_regular_file() || e.path().extension() != ".json") continue;
         const Result r = runMpm("validate " + e.path().string());
         EXPECT_EQ(r.code, 0) << e.path() << "\n" << r.output;
     }
@@ -74,4 +76,32 @@ TEST(Cli, UnstableRunIsCaughtNotWritten) {
     EXPECT_NE(r.output.find("simulation stopped"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("particle id"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out + "/blowup_0010.vdb"));
+}
+
+TEST(Cli, UnstableFrameIsRetriedWithHalfTheStepWhenAsked) {
+    // The same blow-up, but the scene allows retries: each failed frame restarts with half the step until
+    // the CFL number is back inside the stable range (5 -> 2.5 -> 1.25 -> 0.625 -> 0.3125), and stats.csv counts them.
+    const std::string scene = sceneFile("retry.json", R"({
+      "simulation": { "frames": 3, "dx": 0.05, "substeps": 1, "cfl": 5, "retries": 5 },
+      "output": { "surface": false, "points": false },
+      "sets": [ { "material": "water", "material_params": { "bulk_modulus": 1e7 },
+                  "shape": { "type": "box", "min": [0,0,0], "max": [0.3,0.3,0.3] } } ],
+      "colliders": [ { "type": "plane" } ] })");
+    const std::string out = (fs::temp_directory_path() / ("mpm_cli_retry_" + std::to_string(::getpid()))).string();
+    const Result r = runMpm("run " + scene + " -o " + out + " --quiet");
+    ASSERT_EQ(r.code, 0) << r.output;
+    std::ifstream csv(out + "/stats.csv");
+    std::string header, line;
+    std::getline(csv, header);
+    const auto column = [&](const std::string& row, const std::string& name) {
+        std::size_t idx = 0, pos = 0;
+        for (std::size_t p = 0; (p = header.find(',', pos)) != std::string::npos && header.substr(pos, p - pos) != name; pos = p + 1) ++idx;
+        std::stringstream ss(row);
+        std::string cell;
+        for (std::size_t i = 0; i <= idx; ++i) std::getline(ss, cell, ',');
+        return std::stoi(cell);
+    };
+    int retries = 0;
+    while (std::getline(csv, line)) retries += column(line, "retries");
+    EXPECT_GE(retries, 1);
 }
