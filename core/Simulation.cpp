@@ -87,6 +87,12 @@ double Simulation::cflTimeStep() const {
     return speed > 0.0 ? settings_.cfl * settings_.dx / speed : std::numeric_limits<double>::infinity();
 }
 
+void Simulation::refreshSpeedBound() {
+    maxSpeed_ = 0.0f;
+    for (const AnySpecies& s : species_)
+        for (const Vec3f& v : particlesOf(s).v) maxSpeed_ = std::max(maxSpeed_, v.norm());
+}
+
 template <class S>
 void Simulation::permute(S& sp, const std::vector<uint32_t>& dest) {
     sp.forEachArray([&](auto& arr) {

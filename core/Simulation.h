@@ -87,6 +87,8 @@ public:
 
     /// dt <= C dx / (c + |v|max): c from the stiffest species, |v|max from the last G2P.
     double cflTimeStep() const;
+    /// Call after writing particle velocities directly, so that the next CFL step sees them.
+    void refreshSpeedBound();
     FrameStats measure() const;
 
     std::vector<AnySpecies>& species() { return species_; }

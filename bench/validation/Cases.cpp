@@ -1,0 +1,384 @@
+// The validation cases. Each one: load scenes/validation/<case>.json, set dx = h / 2^level and the
+// choice under test, set the initial state the scene format cannot express (an analytic velocity or
+// pressure field), run, and reduce the run to one error number. Formulas and bands are those of
+// ../shared/validation/README.md; the published dam-break data sit beside the scenes.
+#include "Cases.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include "io/Scene.h"
+
+namespace mpm::validation {
+
+namespace {
+
+std::string& sceneDirectory() {
+    static std::string dir = MPM_SOURCE_DIR "/scenes/validation";
+    return dir;
+}
+
+/// A loaded case scene, refined and configured, with its particles emitted.
+struct Setup {
+    SceneDesc scene;
+    std::unique_ptr<Simulation> sim;
+};
+
+Setup load(const std::string& name, const CaseConfig& c, double cflOverride = -1.0) {
+    Setup s;
+    s.scene = loadScene(sceneDirectory() + "/" + name + ".json");
+    SimulationSettings& st = s.scene.settings;
+    st.dx /= double(1 << c.level);
+    st.transfer.interpolation = c.interpolation;
+    st.transfer.force = c.force;
+    st.cfl = cflOverride > 0 ? cflOverride : c.cfl;
+    for (ParticleSetDesc& d : s.scene.sets) d.particlesPerCell = c.particlesPerCell;
+    s.sim = buildSimulation(s.scene);
+    s.sim->emitDue();
+    return s;
+}
+
+/// Runs substeps until time t, landing on it exactly; returns the wall seconds spent.
+double runUntil(Simulation& sim, double t) {
+    const auto start = std::chrono::steady_clock::now();
+    const double target = sim.settings().targetDt();
+    while (sim.time() < t - 1e-12) sim.substep(std::min(target, t - sim.time()));
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+template <class M> Species<M>& only(Simulation& sim) { return std::get<Species<M>>(sim.species().at(0)); }
+
+std::string kv(std::initializer_list<std::pair<const char*, double>> items) {
+    std::ostringstream s;
+    bool first = true;
+    for (const auto& [k, v] : items) {
+        s << (first ? "" : ";") << k << "=" << v;
+        first = false;
+    }
+    return s.str();
+}
+
+CaseResult finish(Simulation& sim, double wall, double error, bool pass, std::string detail = "") {
+    CaseResult r;
+    r.error = error;
+    r.pass = pass;
+    r.dx = sim.settings().dx;
+    r.particles = sim.particleCount();
+    r.substeps = sim.substepCount();
+    r.wallSeconds = wall;
+    r.detail = std::move(detail);
+    return r;
+}
+
+/// Least-squares slope and intercept of y against x.
+std::pair<double, double> fitLine(const std::vector<double>& x, const std::vector<double>& y) {
+    const double n = double(x.size());
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) sx += x[i], sy += y[i], sxx += x[i] * x[i], sxy += x[i] * y[i];
+    const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+    return {slope, (sy - slope * sx) / n};
+}
+
+std::vector<std::pair<double, double>> readTable(const std::string& file) {
+    std::ifstream in(sceneDirectory() + "/" + file);
+    if (!in) throw std::runtime_error("cannot open " + sceneDirectory() + "/" + file);
+    std::vector<std::pair<double, double>> rows;
+    for (std::string line; std::getline(in, line);) {
+        if (line.empty() || line[0] == '#' || !std::isdigit(static_cast<unsigned char>(line[0]))) continue;
+        const auto comma = line.find(',');
+        rows.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
+    }
+    return rows;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// 1. Free fall: symplectic Euler is exact, x_n = x0 + v0 t + g t^2 / 2 + g dt t / 2 at fixed dt.
+CaseResult freeFall(const CaseConfig& c) {
+    Setup s = load("free_fall", c);
+    Simulation& sim = *s.sim;
+    const auto& sp = only<Water>(sim);
+    const std::vector<Vec3d> x0 = sp.p.x;
+    const Vec3d v0 = sp.p.v[0].cast<double>(), g = sim.settings().gravity;
+    const double dt = sim.settings().targetDt(), tEnd = s.scene.frames / sim.settings().fps;
+    const auto start = std::chrono::steady_clock::now();
+    while (sim.substepCount() * dt < tEnd - 1e-12) sim.substep(dt);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double t = sim.substepCount() * dt;
+    const Vec3d shift = v0 * t + 0.5 * g * t * t + 0.5 * g * dt * t;
+    double err = 0;
+    for (std::size_t i = 0; i < sp.size(); ++i) err = std::max(err, (sp.p.x[i] - x0[sp.p.id[i]] - shift).norm());
+    err /= sim.settings().dx;
+    return finish(sim, wall, err, err < 1e-4, kv({{"t", t}}));
+}
+
+// 2. Rigid rotation: v = w x (x - c), C = [w]x, no forces; APIC keeps the angular momentum.
+constexpr int kRotationSteps = 1000;
+CaseResult rigidRotation(const CaseConfig& c) {
+    Setup s = load("rigid_rotation", c);
+    Simulation& sim = *s.sim;
+    auto& sp = only<Water>(sim);
+    const Vec3d w(0.3, 1.0, -0.2);
+    Mat3f W;
+    W << 0, -w[2], w[1], w[2], 0, -w[0], -w[1], w[0], 0;
+    for (std::size_t i = 0; i < sp.size(); ++i) {
+        sp.p.v[i] = w.cross(sp.p.x[i]).cast<float>();
+        sp.p.C[i] = W;
+    }
+    sim.refreshSpeedBound();
+    const Vec3d L0 = sim.measure().angularMomentum;
+    // A quarter of a cell per step at the rim.
+    const double dt = 0.25 * sim.settings().dx / (w.norm() * 0.3);
+    const auto start = std::chrono::steady_clock::now();
+    for (int n = 0; n < kRotationSteps; ++n) sim.substep(dt);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const FrameStats st = sim.measure();
+    const double drift = (st.angularMomentum - L0).norm() / L0.norm();
+    return finish(sim, wall, drift, drift < 1e-4, kv({{"momentum", st.momentum.norm()}}));
+}
+
+// 3. Axial vibrating bar (Bardenhagen 2002): mode 1, T = 4 L / c; v_cm = (2 v0 / pi) cos(w1 t).
+CaseResult vibratingBar(const CaseConfig& c) {
+    Setup s = load("vibrating_bar", c);
+    Simulation& sim = *s.sim;
+    auto& sp = only<FixedCorotated>(sim);
+    const double L = 25.0, E = 100.0, rho = 1.0, v0 = 0.1;
+    const double period = 4.0 * L / std::sqrt(E / rho);
+    for (std::size_t i = 0; i < sp.size(); ++i) sp.p.v[i] = Vec3f(float(v0 * std::sin(M_PI * sp.p.x[i][0] / (2 * L))), 0, 0);
+    sim.refreshSpeedBound();
+    auto vcm = [&] {
+        double m = 0, p = 0;
+        for (std::size_t i = 0; i < sp.size(); ++i) m += sp.p.mass[i], p += sp.p.mass[i] * sp.p.v[i][0];
+        return p / m;
+    };
+    auto energy = [&] { const FrameStats st = sim.measure(); return st.kineticEnergy + st.elasticEnergy; };
+    const double e0 = energy();
+    std::vector<double> crossings;
+    double prevT = 0, prevV = vcm(), wall = 0, amplitude = 0;
+    const double tEnd = 2.0 * period + 0.3 * period;
+    const auto start = std::chrono::steady_clock::now();
+    while (sim.time() < tEnd) {
+        sim.substep(sim.settings().targetDt());
+        const double v = vcm();
+        amplitude = std::max(amplitude, std::abs(v));
+        if ((prevV > 0) != (v > 0)) crossings.push_back(prevT + (sim.time() - prevT) * prevV / (prevV - v));
+        prevT = sim.time();
+        prevV = v;
+    }
+    wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (crossings.size() < 2) return finish(sim, wall, 1.0, false, "no oscillation");
+    const double measured = 2.0 * (crossings.back() - crossings.front()) / double(crossings.size() - 1);
+    const double err = std::abs(measured - period) / period;
+    const double drift = std::abs(energy() - e0) / e0 / (sim.time() / period);
+    return finish(sim, wall, err, err < 0.01 && drift < 0.01,
+                  kv({{"period", measured}, {"vcm_amplitude", amplitude}, {"energy_drift_per_period", drift}}));
+}
+
+// 5. Cantilever under its own weight: Euler-Bernoulli plus Timoshenko shear. Sudden gravity makes the
+// tip oscillate between 0 and 2 delta; the mean over whole periods is the static deflection.
+CaseResult cantilever(const CaseConfig& c) {
+    Setup s = load("cantilever", c);
+    Simulation& sim = *s.sim;
+    auto& sp = only<FixedCorotated>(sim);
+    const double L = 1.0, h = 0.1, E = 1e8, nu = 0.3, rho = 1000, g = 9.81, kappa = 5.0 / 6.0;
+    const double G = E / (2 * (1 + nu));
+    const double delta = 3 * rho * g * std::pow(L, 4) / (2 * E * h * h) + rho * g * L * L / (2 * kappa * G);
+    const double f1 = 1.8751 * 1.8751 / (2 * M_PI) * std::sqrt(E * h * h / (12 * rho * std::pow(L, 4)));
+    const double dx = sim.settings().dx;
+    std::map<int32_t, double> rest;  // tip particles (the last cell) and their initial height
+    for (std::size_t i = 0; i < sp.size(); ++i)
+        if (sp.p.x[i][0] > L - dx) rest[sp.p.id[i]] = sp.p.x[i][1];
+    auto deflection = [&] {
+        double sum = 0;
+        int n = 0;
+        for (std::size_t i = 0; i < sp.size(); ++i)
+            if (auto it = rest.find(sp.p.id[i]); it != rest.end()) sum += it->second - sp.p.x[i][1], ++n;
+        return sum / n;
+    };
+    const int periods = 3;
+    const double tEnd = periods / f1;
+    double weighted = 0, prevT = 0, prevD = 0, wall = 0;
+    std::vector<double> ups;  // upward crossings of the mean, for the period
+    const auto start = std::chrono::steady_clock::now();
+    while (sim.time() < tEnd - 1e-12) {
+        sim.substep(std::min(sim.settings().targetDt(), tEnd - sim.time()));
+        const double d = deflection();
+        weighted += 0.5 * (d + prevD) * (sim.time() - prevT);
+        if (prevD < delta && d >= delta) ups.push_back(prevT + (sim.time() - prevT) * (delta - prevD) / (d - prevD));
+        prevT = sim.time();
+        prevD = d;
+    }
+    wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double mean = weighted / sim.time();
+    const double err = std::abs(mean - delta) / delta;
+    const double period = ups.size() >= 2 ? (ups.back() - ups.front()) / double(ups.size() - 1) : 0.0;
+    const double periodErr = period > 0 ? std::abs(period * f1 - 1.0) : 1.0;
+    return finish(sim, wall, err, err < 0.03 && periodErr < 0.03,
+                  kv({{"mean_deflection", mean}, {"analytic", delta}, {"period", period}, {"period_error", periodErr}}));
+}
+
+// 6. Hydrostatic column: start in the analytic state, J(Z) = (1 + rho0 g (H0 - Z) / k)^(-1/gamma), and
+// measure the floor pressure by a least-squares fit of p against the reference height Z over the
+// interior, evaluated at Z = 0 (the first particle layer at a wall carries the usual MPM wall error).
+CaseResult hydrostatic(const CaseConfig& c) {
+    Setup s = load("hydrostatic", c);
+    Simulation& sim = *s.sim;
+    auto& sp = only<Water>(sim);
+    const Water::Params w = sp.params;
+    const double H0 = 1.0, g = -sim.settings().gravity[1], dx = sim.settings().dx;
+    auto J = [&](double Z) { return std::pow(1.0 + w.density * g * (H0 - Z) / w.bulkModulus, -1.0 / w.gamma); };
+    std::vector<double> z0(sp.size());
+    for (std::size_t i = 0; i < sp.size(); ++i) {
+        const double Z = sp.p.x[i][1];
+        z0[sp.p.id[i]] = Z;
+        // Compressed height: the integral of J from 0 to Z (midpoint rule).
+        const int n = 64;
+        double y = 0;
+        for (int k = 0; k < n; ++k) y += J((k + 0.5) * Z / n) * Z / n;
+        sp.p.x[i][1] = y;
+        sp.state.J[i] = float(J(Z));
+    }
+    const double tEnd = s.scene.frames / sim.settings().fps;
+    double floorSum = 0, minPressure = 1e30, wall = 0;
+    int samples = 0;
+    const auto start = std::chrono::steady_clock::now();
+    while (sim.time() < tEnd - 1e-12) {
+        sim.substep(std::min(sim.settings().targetDt(), tEnd - sim.time()));
+        std::vector<double> Z, p;
+        for (std::size_t i = 0; i < sp.size(); ++i) {
+            const double pi = Water::pressure(w, sp.state.J[i]), Zi = z0[sp.p.id[i]];
+            minPressure = std::min(minPressure, pi);
+            if (Zi > dx && Zi < H0 - dx) Z.push_back(Zi), p.push_back(pi);
+        }
+        floorSum += fitLine(Z, p).second;
+        ++samples;
+    }
+    wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double rhoGH = w.density * g * H0;
+    const double err = std::abs(floorSum / samples / rhoGH - 1.0);
+    const double maxSpeed = sim.measure().maxSpeed;
+    return finish(sim, wall, err, err < 0.01 && minPressure > -0.01 * rhoGH,
+                  kv({{"floor_pressure", floorSum / samples}, {"min_pressure", minPressure}, {"max_speed", maxSpeed}}));
+}
+
+// 7. Dam break against Martin and Moyce (1952), n^2 = 2. Front Z = x / a against T = t sqrt(2 g / a),
+// measured on the bulk: the furthest x-column of width dx holding at least one cell depth of water.
+CaseResult damBreak(const CaseConfig& c) {
+    Setup s = load("dam_break", c);
+    Simulation& sim = *s.sim;
+    const auto& sp = only<Water>(sim);
+    const double a = s.scene.sets[0].shape.max[0], depth = s.scene.sets[0].shape.max[2];
+    const double g = -sim.settings().gravity[1], dx = sim.settings().dx;
+    const auto front = readTable("martin_moyce_n2_front.csv");
+    const auto height = readTable("martin_moyce_n2_height.csv");
+    auto frontZ = [&] {
+        // Water volume per x-column divided by its cross-section: the column's water height.
+        std::map<long, double> vol;
+        for (std::size_t i = 0; i < sp.size(); ++i) vol[long(std::floor(sp.p.x[i][0] / dx))] += sp.p.volume0[i] * sp.state.J[i];
+        long last = 0;
+        for (const auto& [col, v] : vol)
+            if (v / (dx * depth) >= dx) last = std::max(last, col);
+        return (last + 1) * dx / a;
+    };
+    auto columnH = [&] {
+        double h = 0;
+        for (std::size_t i = 0; i < sp.size(); ++i)
+            if (sp.p.x[i][0] < dx) h = std::max(h, sp.p.x[i][1]);
+        return h / (2 * a);
+    };
+    double sq = 0, wall = 0, sqH = 0;
+    int n = 0, nH = 0;
+    const double Tmin = 0.84, Tmax = 3.33;
+    std::vector<std::pair<double, int>> events;  // time, 0 = front sample k, 1 = height sample k
+    for (std::size_t k = 0; k < front.size(); ++k)
+        if (front[k].first >= Tmin && front[k].first <= Tmax) events.emplace_back(front[k].first / std::sqrt(2 * g / a), int(k));
+    for (std::size_t k = 0; k < height.size(); ++k)
+        if (height[k].first / std::sqrt(g / a) <= Tmax / std::sqrt(2 * g / a)) events.emplace_back(height[k].first / std::sqrt(g / a), -1 - int(k));
+    std::sort(events.begin(), events.end());
+    for (const auto& [t, k] : events) {
+        wall += runUntil(sim, t);
+        if (k >= 0) {
+            const double rel = (frontZ() - front[k].second) / front[k].second;
+            sq += rel * rel, ++n;
+        } else {
+            const double rel = (columnH() - height[-1 - k].second) / height[-1 - k].second;
+            sqH += rel * rel, ++nH;
+        }
+    }
+    const double rms = std::sqrt(sq / n);
+    return finish(sim, wall, rms, rms < 0.10,
+                  kv({{"final_front_Z", frontZ()}, {"height_rms", nH ? std::sqrt(sqH / nH) : 0.0}, {"a", a}}));
+}
+
+// 8. Angle of repose (Klar et al. 2016): a planar sand column collapses; the flank angle fitted between
+// 10% and 80% of the pile height must lie in [phi - 3, phi + 6] degrees.
+CaseResult angleOfRepose(const CaseConfig& c, double phiDegrees) {
+    Setup s = load("angle_of_repose", c);
+    Simulation& sim = *s.sim;
+    auto& sp = only<Sand>(sim);
+    sp.params.h0 = float(phiDegrees);  // no hardening: phi(q) = h0
+    std::fill(sp.state.alpha.begin(), sp.state.alpha.end(), Sand::alphaOf(sp.params, 0.0f));
+    const double dx = sim.settings().dx;
+    const double tEnd = s.scene.frames / sim.settings().fps;
+    const double wall = runUntil(sim, tEnd);
+    // Top surface: the highest particle per x-bin of width dx, both flanks folded onto |x|.
+    std::map<long, double> top;
+    for (std::size_t i = 0; i < sp.size(); ++i) {
+        const long b = long(std::floor(sp.p.x[i][0] / dx));
+        top[b] = std::max(top.count(b) ? top[b] : 0.0, sp.p.x[i][1]);
+    }
+    double H = 0;
+    for (const auto& [b, y] : top) H = std::max(H, y);
+    std::vector<double> r, y;
+    for (const auto& [b, yy] : top)
+        if (yy >= 0.1 * H && yy <= 0.8 * H) r.push_back(std::abs((b + 0.5) * dx)), y.push_back(yy);
+    if (r.size() < 3) return finish(sim, wall, 90.0, false, "flank too short to fit");
+    const double angle = std::atan(std::abs(fitLine(r, y).first)) * 180.0 / M_PI;
+    const double err = std::abs(angle - phiDegrees);
+    return finish(sim, wall, err, angle >= phiDegrees - 3 && angle <= phiDegrees + 6,
+                  kv({{"angle", angle}, {"phi", phiDegrees}, {"pile_height", H}, {"max_speed", sim.measure().maxSpeed}}));
+}
+
+}  // namespace
+
+std::string CaseConfig::label() const {
+    std::ostringstream s;
+    s << (interpolation == Interpolation::Cubic ? "cubic" : "quadratic") << " ppc" << particlesPerCell << " cfl" << cfl << " "
+      << (force == ForceScheme::MLS ? "mls" : "standard");
+    return s.str();
+}
+
+void setSceneDirectory(const std::string& dir) { sceneDirectory() = dir; }
+
+const std::vector<ValidationCase>& cases() {
+    static const std::vector<ValidationCase> all = [] {
+        std::vector<ValidationCase> v;
+        v.push_back({"free_fall", "max |x - x_exact| / dx after 0.5 s", "< 1e-4 (round-off)", 0, 2, 1, freeFall});
+        v.push_back({"rigid_rotation", "|L - L0| / |L0| after 1000 steps (float)", "< 1e-4", 0, 2, 1, rigidRotation});
+        v.push_back({"vibrating_bar", "|T - T_exact| / T_exact, mode 1 (L = 25, T = 10)",
+                     "< 1% at L/dx >= 25, energy drift < 1% per period", 0, 2, 1, vibratingBar});
+        v.push_back({"cantilever", "|mean tip deflection - delta| / delta over 3 periods (delta = 1.4868e-2 m)",
+                     "< 3% at h/dx >= 8, period within 3%", 2, 2, 1, cantilever});
+        v.push_back({"hydrostatic", "|p_floor / (rho0 g H0) - 1|", "< 1% at H0/dx >= 32, no tension", 1, 2, 1, hydrostatic});
+        v.push_back({"dam_break", "relative RMS error of the front Z for 0.84 <= T <= 3.33 (Martin and Moyce 1952)",
+                     "< 10%", 0, 2, 1, damBreak});
+        for (int phi : {20, 30, 40})
+            v.push_back({"angle_of_repose_" + std::to_string(phi), "|flank angle - phi| [degrees]",
+                         "angle in [phi - 3, phi + 6] degrees", 0, 1, 0,
+                         [phi](const CaseConfig& c) { return angleOfRepose(c, phi); }});
+        return v;
+    }();
+    return all;
+}
+
+const ValidationCase& findCase(const std::string& name) {
+    for (const ValidationCase& c : cases())
+        if (c.name == name) return c;
+    throw std::invalid_argument("unknown validation case \"" + name + "\"");
+}
+
+}  // namespace mpm::validation

@@ -1,0 +1,52 @@
+#pragma once
+// Validation cases with known answers (../shared/validation/README.md): each loads its scene from
+// scenes/validation/, refines it, runs it and measures its error with the metric defined here. Used by
+// `mpm_report` (error against run time, over resolutions and accuracy/speed choices) and, at their
+// cheapest settings, by the unit tests.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/Kernels.h"
+#include "sparse/Transfer.h"
+
+namespace mpm::validation {
+
+/// A choice that trades accuracy for speed, and the resolution level (dx = h / 2^level).
+struct CaseConfig {
+    int level = 0;
+    Interpolation interpolation = Interpolation::Quadratic;
+    ForceScheme force = ForceScheme::Standard;
+    double particlesPerCell = 8.0;
+    double cfl = 0.5;
+    std::string label() const;  ///< "quadratic ppc8 cfl0.5 standard"
+};
+
+struct CaseResult {
+    double error = 0.0;          ///< the case's metric (see ValidationCase::metric)
+    bool pass = false;           ///< within the pass band (only meaningful at or past passLevel)
+    double dx = 0.0;
+    std::size_t particles = 0;
+    long long substeps = 0;
+    double wallSeconds = 0.0;    ///< simulation only, set-up and measuring excluded
+    std::string detail;          ///< secondary numbers, "key=value;..."
+};
+
+struct ValidationCase {
+    std::string name;
+    std::string metric;          ///< what error means, with units
+    std::string band;            ///< the pass band in words
+    int passLevel = 0;           ///< the band applies from this level on (e.g. L/dx >= 25)
+    int maxLevel = 2;            ///< finest level the report runs for the baseline choice
+    int maxLevelChoices = 2;     ///< finest level for the other choices (cost control)
+    std::function<CaseResult(const CaseConfig&)> run;
+};
+
+/// Where scenes/validation/ lives (defaults to the source tree this was built from).
+void setSceneDirectory(const std::string& dir);
+
+/// All cases, in the order of the validation README.
+const std::vector<ValidationCase>& cases();
+const ValidationCase& findCase(const std::string& name);
+
+}  // namespace mpm::validation
