@@ -132,7 +132,7 @@ CaseResult rigidRotation(const CaseConfig& c) {
     sim.refreshSpeedBound();
     const Vec3d L0 = sim.measure().angularMomentum;
     // A quarter of a cell per step at the rim.
-    const double dt = 0.25 * sim.settings().dx / (w.norm() * 0.3);
+    const double dt = 0.25 * sim.settings().dx / (w.norm() * s.scene.sets[0].shape.radius);
     const auto start = std::chrono::steady_clock::now();
     for (int n = 0; n < kRotationSteps; ++n) sim.substep(dt);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
