@@ -135,6 +135,11 @@ def stage(lo, hi, floor):
 
     if floor:
         bpy.ops.mesh.primitive_plane_add(size=20 * radius, location=(centre.x, centre.y, lo.z))
+        grey = bpy.data.materials.new("floor")
+        grey.diffuse_color = (0.3, 0.3, 0.32, 1.0)
+        grey.use_nodes = True
+        grey.node_tree.nodes.get("Principled BSDF").inputs["Base Color"].default_value = (0.3, 0.3, 0.32, 1.0)
+        bpy.context.active_object.data.materials.append(grey)
 
 
 def render(path, args):
