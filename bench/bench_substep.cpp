@@ -12,18 +12,12 @@
 #include <string>
 #include <thread>
 
+#include "Machine.h"
 #include "core/Simulation.h"
 
 using namespace mpm;
 
 namespace {
-std::string cpuName() {
-    std::ifstream in("/proc/cpuinfo");
-    for (std::string line; std::getline(in, line);)
-        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-    return "unknown CPU";
-}
-
 double measure(int threads, long particles, int substeps, const SimulationSettings& s) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
     Simulation sim(s);
@@ -59,7 +53,7 @@ int main(int argc, char** argv) {
     if (argc > 3 && std::strcmp(argv[3], "cubic") == 0) s.transfer.interpolation = Interpolation::Cubic;
     if (argc > 4 && std::strcmp(argv[4], "mls") == 0) s.transfer.force = ForceScheme::MLS;
     const int all = int(std::thread::hardware_concurrency());
-    std::printf("machine: %s, %d hardware threads\n", cpuName().c_str(), all);
+    std::printf("machine: %s, %d hardware threads\n", bench::cpuModel().c_str(), all);
     std::printf("scene: water block, %ld particles, 8 per cell, %s kernel, %s force, %d timed substeps\n", particles,
                 s.transfer.interpolation == Interpolation::Cubic ? "cubic" : "quadratic",
                 s.transfer.force == ForceScheme::MLS ? "MLS" : "standard", substeps);

@@ -182,10 +182,11 @@ double Simulation::substep(double dtMax) {
     // A material crushed (or a particle flung) far past anything physical makes the CFL step collapse and
     // the frame stall: stop there instead of crawling on with ever smaller steps.
     const double collapse = settings_.stability.stepCollapse;
-    if (collapse > 0.0 && cflTimeStep() < cflBefore / collapse) {
+    const double cflAfter = collapse > 0.0 ? cflTimeStep() : cflBefore;
+    if (collapse > 0.0 && cflAfter < cflBefore / collapse) {
         const auto [s, i] = stiffestParticle();
         std::ostringstream cause;
-        cause << "time step collapsed from " << cflBefore << " s to " << cflTimeStep()
+        cause << "time step collapsed from " << cflBefore << " s to " << cflAfter
               << " s in one substep (wave speed or particle speed exploded; J = " << volumeRatioOf(s, i) << ")";
         fail(cause.str(), s, i, dt);
     }

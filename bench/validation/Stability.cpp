@@ -16,6 +16,7 @@ namespace {
 
 constexpr double kDx = 0.02;       ///< grid spacing of every setup [m]
 constexpr double kBlock = 0.08;    ///< block edge: 4 cells, 512 particles
+constexpr double kSphereRadius = 0.08;
 constexpr double kImpactSpeed = 1000.0;
 constexpr double kSpinFraction = 0.3;       ///< w R = 0.3 c
 constexpr double kCollisionFraction = 0.3;  ///< closing speed 0.3 c
@@ -66,7 +67,11 @@ double restWaveSpeed(const StabilityRun& r, const std::string& params) {
     return r.cfl * kDx / sim->cflTimeStep();
 }
 
-std::string sceneText(const StabilityRun& r) {
+/// Setups whose speeds are fractions of the wave speed.
+bool needsWaveSpeed(const std::string& setup) { return setup == "collision" || setup == "spinning_sphere"; }
+
+/// c: the material's rest wave speed, for the setups that need it.
+std::string sceneText(const StabilityRun& r, double c) {
     const std::string& m = r.material;
     const std::string zero = vec(0, 0, 0);
     const double b = kBlock;
@@ -83,7 +88,6 @@ std::string sceneText(const StabilityRun& r) {
         return scene(r, set("body", m, "{}", box(0, 0, 0, b, b, b), vec(kImpactSpeed, 0, 0)),
                      R"({ "type": "plane", "point": )" + vec(b + 2 * kDx, 0, 0) + R"(, "normal": [-1, 0, 0], "boundary": "sticky" })",
                      false);
-    const double c = restWaveSpeed(r, "{}");
     if (r.setup == "collision") {
         const double v = 0.5 * kCollisionFraction * c;
         return scene(r,
@@ -92,7 +96,7 @@ std::string sceneText(const StabilityRun& r) {
                      "", false);
     }
     if (r.setup == "spinning_sphere")  // spin set after loading: v = w x r, C = [w]x
-        return scene(r, set("sphere", m, "{}", R"({ "type": "sphere", "center": [0, 0, 0], "radius": 0.08 })", zero), "", false);
+        return scene(r, set("sphere", m, "{}", R"({ "type": "sphere", "center": [0, 0, 0], "radius": )" + std::to_string(kSphereRadius) + " }", zero), "", false);
     throw std::invalid_argument("unknown stability setup \"" + r.setup + "\"");
 }
 
@@ -122,10 +126,11 @@ const std::vector<std::string>& stabilityMaterials() {
 }
 
 StabilityOutcome runStability(const StabilityRun& r) {
-    SceneDesc desc = parseScene(sceneText(r), "stability_" + r.setup + ".json");
+    const double c = needsWaveSpeed(r.setup) ? restWaveSpeed(r, "{}") : 0.0;
+    SceneDesc desc = parseScene(sceneText(r, c), "stability_" + r.setup + ".json");
     auto sim = buildSimulation(desc);
     sim->emitDue();
-    if (r.setup == "spinning_sphere") spin(*sim, kSpinFraction * restWaveSpeed(r, "{}") / 0.08);
+    if (r.setup == "spinning_sphere") spin(*sim, kSpinFraction * c / kSphereRadius);
     StabilityOutcome out;
     out.particles = sim->particleCount();
     FrameStats st = sim->measure();

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <thread>
 
+#include "../Machine.h"
 #include "Cases.h"
 #include "Stability.h"
 #include "io/AtomicFile.h"
@@ -22,13 +23,6 @@ using namespace mpm;
 using namespace mpm::validation;
 
 namespace {
-
-std::string cpuModel() {
-    std::ifstream in("/proc/cpuinfo");
-    for (std::string line; std::getline(in, line);)
-        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-    return "unknown CPU";
-}
 
 std::string csvQuote(const std::string& s) {
     std::string out = "\"";
@@ -58,7 +52,7 @@ std::vector<std::pair<std::string, CaseConfig>> choices(bool quick) {
 
 void writeMachine(const std::string& dir, int threads) {
     std::ostringstream m;
-    m << "cpu: " << cpuModel() << "\nthreads: " << threads << "\nhardware_threads: " << std::thread::hardware_concurrency()
+    m << "cpu: " << bench::cpuModel() << "\nthreads: " << threads << "\nhardware_threads: " << std::thread::hardware_concurrency()
       << "\ncompiler: " << __VERSION__ << "\nbuild: " << MPM_BUILD_FLAGS << "\n";
     writeTextAtomically(dir + "/machine.txt", m.str());
 }
