@@ -10,70 +10,98 @@ namespace mpm {
 
 namespace {
 
+/// Four floats in one SSE register (GCC/Clang vector extension): a node's (mass, momentum) in P2G and its
+/// (velocity, 0) in G2P, so that each node costs one vector operation instead of four scalar ones.
+using f4 = float __attribute__((vector_size(16)));
+inline f4 splat(float a) { return f4{a, a, a, a}; }
+/// (0, a) for a 3-vector a: a column that adds to momentum and leaves mass alone.
+inline f4 lanes123(float a, float b, float c) { return f4{0.0f, a, b, c}; }
+
 /// A dense block covering a leaf plus the stencil's reach into its +x/+y/+z neighbours.
 template <class K>
 struct LocalBlock {
     static constexpr int N = kLeafDim + K::kWidth - 1;
     static constexpr int kNodes = N * N * N;
     static int index(int a, int b, int c) { return (a * N + b) * N + c; }
+    /// Visits every block node with the leaf among the 8 neighbours that holds it and the offset in that leaf.
+    template <class F>
+    static void forEachNode(const SparseGrid& grid, uint32_t l, F&& f) {
+        const auto& nb = grid.neighbours(l);
+        for (int a = 0; a < N; ++a)
+            for (int b = 0; b < N; ++b)
+                for (int c = 0; c < N; ++c) {
+                    const LeafView& leaf = grid.leaf(nb[((a >> kLeafLog2) << 2) | ((b >> kLeafLog2) << 1) | (c >> kLeafLog2)]);
+                    f(index(a, b, c), leaf, leafOffset(a & (kLeafDim - 1), b & (kLeafDim - 1), c & (kLeafDim - 1)));
+                }
+    }
 };
 
-/// Weights of one particle: base node relative to its leaf, and per-axis weights and derivatives.
+/// Weights of one particle: base node relative to its leaf, and per axis the weights w, their derivatives
+/// dw (per cell) and the node offsets d = x_i - x_p [m].
 template <class K>
 struct Stencil {
     int local[3];
     float fx[3];
     float w[3][K::kWidth];
     float dw[3][K::kWidth];
+    float d[3][K::kWidth];
 
-    Stencil(const Vec3d& x, double invDx, const Vec3i& leafOrigin) {
+    Stencil(const Vec3d& x, double invDx, float dx, const Vec3i& leafOrigin) {
         for (int a = 0; a < 3; ++a) {
             const double g = x[a] * invDx;
             const double base = std::floor(g - K::kBaseShift);
             fx[a] = float(g - base);  // exact up to double rounding, far from the origin too
             local[a] = int(base) - leafOrigin[a];
             K::weights(fx[a], w[a], dw[a]);
+            for (int i = 0; i < K::kWidth; ++i) d[a][i] = (float(i) - fx[a]) * dx;
         }
     }
+    int node(int i, int j, int k) const { return LocalBlock<K>::index(local[0] + i, local[1] + j, local[2] + k); }
 };
 
+/// P2G of one species' particles into the local block (lane 0 mass, lanes 1-3 momentum). Per node:
+///   m_i += w m,   (mv)_i += w (m v + A d) + S grad w,
+/// with A = m C (APIC) or m C - dt V0 D^-1 tau (MLS, and then S = 0), S = -dt V0 tau / dx (standard force).
+/// The sums factor along the axes, so the inner loop does a handful of vector operations per node.
 template <class K, bool MLS, class Sp>
-void scatterSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, double dx, float dt, float* mass,
-                    float (*mom)[3]) {
+void scatterSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, double dx, float dt, f4* block) {
     using M = typename Sp::Material;
-    using B = LocalBlock<K>;
     constexpr int W = K::kWidth;
     const double invDx = 1.0 / dx;
     const float fdx = float(dx), finvDx = float(invDx);
     const float Dinv = K::kInverseInertia * finvDx * finvDx;
     const ParticleArrays& P = sp.p;
     for (uint32_t p = begin; p < end; ++p) {
-        const Stencil<K> st(P.x[p], invDx, origin);
+        const Stencil<K> st(P.x[p], invDx, fdx, origin);
         const float m = P.mass[p];
         const Vec3f mv = m * P.v[p];
         const Mat3f tau = M::kirchhoff(sp.params, sp.state, p);
-        // MLS folds the stress into the affine term; the standard force uses grad w explicitly.
-        const Mat3f affine = MLS ? Mat3f(m * P.C[p] - (dt * P.volume0[p] * Dinv) * tau) : Mat3f(m * P.C[p]);
-        const Mat3f stressImpulse = (-dt * P.volume0[p] * finvDx) * tau;
+        const Mat3f A = MLS ? Mat3f(m * P.C[p] - (dt * P.volume0[p] * Dinv) * tau) : Mat3f(m * P.C[p]);
+        const f4 q{m, mv[0], mv[1], mv[2]};
+        const f4 ax = lanes123(A(0, 0), A(1, 0), A(2, 0)), ay = lanes123(A(0, 1), A(1, 1), A(2, 1)),
+                 az = lanes123(A(0, 2), A(1, 2), A(2, 2));
+        f4 sx{}, sy{}, sz{};
+        if constexpr (!MLS) {
+            const Mat3f S = (-dt * P.volume0[p] * finvDx) * tau;
+            sx = lanes123(S(0, 0), S(1, 0), S(2, 0));
+            sy = lanes123(S(0, 1), S(1, 1), S(2, 1));
+            sz = lanes123(S(0, 2), S(1, 2), S(2, 2));
+        }
         for (int i = 0; i < W; ++i) {
-            const float dxi = (float(i) - st.fx[0]) * fdx;
+            const f4 qi = q + st.d[0][i] * ax;
             for (int j = 0; j < W; ++j) {
-                const float dyj = (float(j) - st.fx[1]) * fdx;
+                const f4 qij = qi + st.d[1][j] * ay;
                 const float wij = st.w[0][i] * st.w[1][j];
+                f4 sij{}, szij{};
+                if constexpr (!MLS) {
+                    sij = (st.dw[0][i] * st.w[1][j]) * sx + (st.w[0][i] * st.dw[1][j]) * sy;
+                    szij = wij * sz;
+                }
+                f4* row = block + st.node(i, j, 0);
                 for (int k = 0; k < W; ++k) {
-                    const float dzk = (float(k) - st.fx[2]) * fdx;
-                    const float w = wij * st.w[2][k];
-                    Vec3f contrib = w * (mv + affine * Vec3f(dxi, dyj, dzk));
-                    if constexpr (!MLS) {
-                        const Vec3f gradW(st.dw[0][i] * st.w[1][j] * st.w[2][k], st.w[0][i] * st.dw[1][j] * st.w[2][k],
-                                          st.w[0][i] * st.w[1][j] * st.dw[2][k]);
-                        contrib += stressImpulse * gradW;
-                    }
-                    const int n = B::index(st.local[0] + i, st.local[1] + j, st.local[2] + k);
-                    mass[n] += w * m;
-                    mom[n][0] += contrib[0];
-                    mom[n][1] += contrib[1];
-                    mom[n][2] += contrib[2];
+                    f4 c = (wij * st.w[2][k]) * (qij + st.d[2][k] * az);
+                    if constexpr (!MLS) c += st.w[2][k] * sij + st.dw[2][k] * szij;
+                    row[k] += c;
                 }
             }
         }
@@ -83,73 +111,80 @@ void scatterSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, d
 template <class K, bool MLS>
 void scatterLeaf(const SparseGrid& grid, std::vector<AnySpecies>& species, uint32_t l, float dt) {
     using B = LocalBlock<K>;
-    float mass[B::kNodes];
-    float mom[B::kNodes][3];
-    std::memset(mass, 0, sizeof(mass));
-    std::memset(mom, 0, sizeof(mom));
+    f4 block[B::kNodes];
+    std::memset(block, 0, sizeof(block));
     const Vec3i origin = grid.leaf(l).origin;
     for (AnySpecies& s : species)
-        std::visit([&](auto& sp) { scatterSpecies<K, MLS>(sp, sp.leafStart[l], sp.leafStart[l + 1], origin, grid.dx(), dt, mass, mom); },
+        std::visit([&](auto& sp) { scatterSpecies<K, MLS>(sp, sp.leafStart[l], sp.leafStart[l + 1], origin, grid.dx(), dt, block); },
                    s);
     // Add the local block into the leaf and its 7 neighbours; the colouring keeps this race free.
-    const auto& nb = grid.neighbours(l);
-    for (int a = 0; a < B::N; ++a)
-        for (int b = 0; b < B::N; ++b)
-            for (int c = 0; c < B::N; ++c) {
-                const int n = B::index(a, b, c);
-                if (mass[n] == 0.0f) continue;
-                const LeafView& leaf = grid.leaf(nb[((a >> kLeafLog2) << 2) | ((b >> kLeafLog2) << 1) | (c >> kLeafLog2)]);
-                const int off = leafOffset(a & (kLeafDim - 1), b & (kLeafDim - 1), c & (kLeafDim - 1));
-                leaf.mass[off] += mass[n];
-                leaf.momentum[3 * off + 0] += mom[n][0];
-                leaf.momentum[3 * off + 1] += mom[n][1];
-                leaf.momentum[3 * off + 2] += mom[n][2];
-            }
+    B::forEachNode(grid, l, [&](int n, const LeafView& leaf, int off) {
+        const f4 b = block[n];
+        if (b[0] == 0.0f) return;
+        leaf.mass[off] += b[0];
+        leaf.momentum[3 * off + 0] += b[1];
+        leaf.momentum[3 * off + 1] += b[2];
+        leaf.momentum[3 * off + 2] += b[3];
+    });
 }
 
+/// G2P of one species' particles from the local velocity block (lanes 0-2). Gathers
+///   v = sum w v_i,  B = sum w v_i d^T (eq. 3.18),  grad v = sum v_i grad w^T (eq. 3.19),
+/// axis by axis: the k sums first, then j, then i, so each node costs three vector FMAs.
 template <class K, bool MLS, class Sp>
 void gatherSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, double dx, float dt, bool apic,
-                   const float (*vel)[3], float& maxSpeed, float& minKey, G2PSummary& bad, int speciesIndex) {
+                   const f4* vel, float& maxSpeed, float& minKey, G2PSummary& bad, int speciesIndex) {
     using M = typename Sp::Material;
     constexpr int W = K::kWidth;
-    using B = LocalBlock<K>;
     const double invDx = 1.0 / dx;
     const float fdx = float(dx), finvDx = float(invDx);
     const float Dinv = K::kInverseInertia * finvDx * finvDx;
     ParticleArrays& P = sp.p;
     for (uint32_t p = begin; p < end; ++p) {
-        const Stencil<K> st(P.x[p], invDx, origin);
-        Vec3f v = Vec3f::Zero();
-        Mat3f Bp = Mat3f::Zero();      // sum w v_i (x_i - x_p)^T  (eq. 3.18)
-        Mat3f gradV = Mat3f::Zero();   // sum v_i grad w^T         (eq. 3.19)
+        const Stencil<K> st(P.x[p], invDx, fdx, origin);
+        f4 v{}, b0{}, b1{}, b2{}, g0{}, g1{}, g2{};  // v; columns of B; columns of grad v (per cell)
         for (int i = 0; i < W; ++i) {
-            const float dxi = (float(i) - st.fx[0]) * fdx;
+            f4 s{}, sdy{}, sdz{}, sgy{}, sgz{};  // sums over j, k of w_j w_k v_i, times d_y, d_z, or with dw_j, dw_k
             for (int j = 0; j < W; ++j) {
-                const float dyj = (float(j) - st.fx[1]) * fdx;
-                const float wij = st.w[0][i] * st.w[1][j];
+                const f4* row = vel + st.node(i, j, 0);
+                f4 r{}, rdz{}, rgz{};  // sums over k of w_k v_i, w_k d_z v_i, dw_k v_i
                 for (int k = 0; k < W; ++k) {
-                    const float dzk = (float(k) - st.fx[2]) * fdx;
-                    const float w = wij * st.w[2][k];
-                    const float* vi = vel[B::index(st.local[0] + i, st.local[1] + j, st.local[2] + k)];
-                    const Vec3f vn(vi[0], vi[1], vi[2]);
-                    v += w * vn;
-                    Bp += (w * vn) * Vec3f(dxi, dyj, dzk).transpose();
-                    if constexpr (!MLS) {
-                        const Vec3f gradW(st.dw[0][i] * st.w[1][j] * st.w[2][k], st.w[0][i] * st.dw[1][j] * st.w[2][k],
-                                          st.w[0][i] * st.w[1][j] * st.dw[2][k]);
-                        gradV += vn * (finvDx * gradW).transpose();
-                    }
+                    r += st.w[2][k] * row[k];
+                    rdz += (st.w[2][k] * st.d[2][k]) * row[k];
+                    if constexpr (!MLS) rgz += st.dw[2][k] * row[k];
+                }
+                s += st.w[1][j] * r;
+                sdy += (st.w[1][j] * st.d[1][j]) * r;
+                sdz += st.w[1][j] * rdz;
+                if constexpr (!MLS) {
+                    sgy += st.dw[1][j] * r;
+                    sgz += st.w[1][j] * rgz;
                 }
             }
+            v += st.w[0][i] * s;
+            b0 += (st.w[0][i] * st.d[0][i]) * s;
+            b1 += st.w[0][i] * sdy;
+            b2 += st.w[0][i] * sdz;
+            if constexpr (!MLS) {
+                g0 += st.dw[0][i] * s;
+                g1 += st.w[0][i] * sgy;
+                g2 += st.w[0][i] * sgz;
+            }
         }
-        const Mat3f C = Bp * Dinv;
+        const Vec3f vp(v[0], v[1], v[2]);
+        Mat3f C;
+        C << b0[0], b1[0], b2[0], b0[1], b1[1], b2[1], b0[2], b1[2], b2[2];
+        C *= Dinv;
+        Mat3f gradV;
         if constexpr (MLS) gradV = C;
-        P.v[p] = v;
+        else gradV << g0[0], g1[0], g2[0], g0[1], g1[1], g2[1], g0[2], g1[2], g2[2];
+        if constexpr (!MLS) gradV *= finvDx;
+        P.v[p] = vp;
         P.C[p] = apic ? C : Mat3f::Zero();
         M::updateDeformation(sp.params, sp.state, p, gradV, dt);
-        P.x[p] += double(dt) * v.cast<double>();
+        P.x[p] += double(dt) * vp.cast<double>();
         const float key = M::stiffnessKey(sp.state, p);
-        if (!(std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]) && std::isfinite(key))) {
+        if (!(std::isfinite(vp[0]) && std::isfinite(vp[1]) && std::isfinite(vp[2]) && std::isfinite(key))) {
             if (bad.badParticle < 0) {
                 bad.badSpecies = speciesIndex;
                 bad.badParticle = p;
@@ -157,7 +192,7 @@ void gatherSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, do
             }
             continue;
         }
-        maxSpeed = std::max(maxSpeed, v.norm());
+        maxSpeed = std::max(maxSpeed, vp.norm());
         minKey = std::min(minKey, key);
     }
 }
@@ -166,18 +201,11 @@ template <class K, bool MLS>
 void gatherLeaf(const SparseGrid& grid, std::vector<AnySpecies>& species, uint32_t l, float dt, bool apic,
                 float& maxSpeed, float* minKey, G2PSummary& bad) {
     using B = LocalBlock<K>;
-    float vel[B::kNodes][3];
-    const auto& nb = grid.neighbours(l);
-    for (int a = 0; a < B::N; ++a)
-        for (int b = 0; b < B::N; ++b)
-            for (int c = 0; c < B::N; ++c) {
-                const LeafView& leaf = grid.leaf(nb[((a >> kLeafLog2) << 2) | ((b >> kLeafLog2) << 1) | (c >> kLeafLog2)]);
-                const float* src = leaf.momentum + 3 * leafOffset(a & (kLeafDim - 1), b & (kLeafDim - 1), c & (kLeafDim - 1));
-                float* dst = vel[B::index(a, b, c)];
-                dst[0] = src[0];
-                dst[1] = src[1];
-                dst[2] = src[2];
-            }
+    f4 vel[B::kNodes];
+    B::forEachNode(grid, l, [&](int n, const LeafView& leaf, int off) {
+        const float* src = leaf.momentum + 3 * off;
+        vel[n] = f4{src[0], src[1], src[2], 0.0f};
+    });
     const Vec3i origin = grid.leaf(l).origin;
     for (std::size_t s = 0; s < species.size(); ++s)
         std::visit(
