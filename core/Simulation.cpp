@@ -17,6 +17,19 @@ constexpr double kFrameSplitSlack = 1e-9;
 /// Substeps between energy checks inside a frame (frame ends are always checked). Measuring costs about
 /// a tenth of a substep for solids (an SVD per particle), so this keeps it near 0.2%.
 constexpr long long kEnergyCheckInterval = 50;
+
+/// Adds the seconds since the last lap to a phase total.
+class PhaseClock {
+public:
+    void lap(double& total) {
+        const auto now = std::chrono::steady_clock::now();
+        total += std::chrono::duration<double>(now - last_).count();
+        last_ = now;
+    }
+
+private:
+    std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
 }  // namespace
 
 Simulation::Simulation(const SimulationSettings& settings) : settings_(settings) {
@@ -107,11 +120,14 @@ void Simulation::permute(S& sp, const std::vector<uint32_t>& dest) {
 }
 
 void Simulation::bin() {
+    PhaseClock clock;
     std::vector<BinRequest> requests(species_.size());
     for (std::size_t s = 0; s < species_.size(); ++s) {
         std::visit([&](auto& sp) { requests[s] = BinRequest{&sp.p.x, &destination_[s], &sp.leafStart}; }, species_[s]);
     }
-    grid_.rebuild(requests);
+    grid_.updateTopology(requests);
+    clock.lap(phases_.topology);
+    grid_.sortParticles(requests);
     for (std::size_t s = 0; s < species_.size(); ++s) {
         const std::vector<uint32_t>& dest = destination_[s];
         // Particles rarely change leaf between substeps: skip the permutation when it is the identity.
@@ -124,16 +140,16 @@ void Simulation::bin() {
             [](bool a, bool b) { return a && b; });
         if (!identity) std::visit([&](auto& sp) { permute(sp, dest); }, species_[s]);
     }
+    clock.lap(phases_.binning);
 }
 
-float Simulation::updateGrid(float dt) {
-    const Vec3f g = settings_.gravity.cast<float>();
-    const double tEnd = time_ + dt;
+float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders,
+                           const Vec3f& g, float dt, double tEnd) {
     return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, grid_.leafCount()), 0.0f,
+        tbb::blocked_range<std::size_t>(0, grid.leafCount()), 0.0f,
         [&](const tbb::blocked_range<std::size_t>& r, float vmax) {
             for (std::size_t l = r.begin(); l < r.end(); ++l) {
-                const LeafView& leaf = grid_.leaf(l);
+                const LeafView& leaf = grid.leaf(l);
                 // v = (mv) / m on nodes with mass (exact comparison: a threshold would lose momentum), then gravity.
                 for (int n = 0; n < kLeafNodes; ++n) {
                     Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
@@ -141,7 +157,7 @@ float Simulation::updateGrid(float dt) {
                     if (m != 0.0f) v = v / m + dt * g;
                     else v.setZero();
                 }
-                for (const auto& c : colliders_) c->applyToLeaf(leaf, settings_.dx, tEnd);
+                for (const auto& c : colliders) c->applyToLeaf(leaf, grid.dx(), tEnd);
                 for (int n = 0; n < kLeafNodes; ++n)
                     if (leaf.mass[n] != 0.0f) vmax = std::max(vmax, Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm());
             }
@@ -150,23 +166,33 @@ float Simulation::updateGrid(float dt) {
         [](float a, float b) { return std::max(a, b); });
 }
 
+float Simulation::updateGrid(float dt) {
+    return updateGridVelocities(grid_, colliders_, settings_.gravity.cast<float>(), dt, time_ + dt);
+}
+
 double Simulation::substep(double dtMax) {
     // Bin particles by leaf; allocate the leaves their stencils reach and release the others.
     bin();
+    PhaseClock clock;
     // Time step: the caller's bound (target and frame end), and the CFL condition (halved on retries).
     double dt = std::min(dtMax, cflTimeStep() * dtScale_);
     // P2G: mass and momentum, with the stress impulse of this step folded in (thesis 3.14, 3.15, 3.24).
     particlesToGrid(grid_, species_, settings_.transfer, float(dt));
+    clock.lap(phases_.p2g);
     // Grid update: v = mv/m, gravity, colliders and friction (3.20, 3.26, section 5).
     const float vmaxGrid = updateGrid(float(dt));
+    clock.lap(phases_.grid);
     // Thesis pseudocode 3: if a node would move more than maxDisplacement cells, redo with a shorter step.
     if (settings_.maxDisplacement > 0.0 && vmaxGrid * dt > settings_.maxDisplacement * settings_.dx) {
         dt = settings_.maxDisplacement * settings_.dx / vmaxGrid;
         particlesToGrid(grid_, species_, settings_.transfer, float(dt));
+        clock.lap(phases_.p2g);
         updateGrid(float(dt));
+        clock.lap(phases_.grid);
     }
     // G2P: velocity, affine velocity, deformation update with return mapping, advection (3.17-3.19, 3.21).
     const G2PSummary g2p = gridToParticles(grid_, species_, settings_.transfer, float(dt));
+    clock.lap(phases_.g2p);
     if (g2p.badParticle >= 0) fail(std::string("non-finite ") + g2p.badField, g2p.badSpecies, std::size_t(g2p.badParticle), dt);
     // Advection moved every particle by dt v: more than a cell means the step outran its own stencil.
     if (settings_.stability.cellCrossing && double(g2p.maxSpeed) * dt > settings_.dx) {
@@ -192,6 +218,7 @@ double Simulation::substep(double dtMax) {
     }
     time_ += dt;
     ++substeps_;
+    clock.lap(phases_.other);
     return dt;
 }
 

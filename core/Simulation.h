@@ -60,6 +60,23 @@ struct Emitter {
     }
 };
 
+/// Wall seconds spent in each phase of the substeps since the last reset (bench/ reports their shares).
+/// The deformation update and return mapping run fused inside G2P, so their cost is part of g2p.
+struct PhaseSeconds {
+    double topology = 0.0;  ///< leaf set, release, colours and neighbour tables
+    double binning = 0.0;   ///< counting sort by leaf and the permutation of particle arrays
+    double p2g = 0.0;       ///< grid clear and particle-to-grid scatter, stress included
+    double grid = 0.0;      ///< grid velocity update, gravity and colliders
+    double g2p = 0.0;       ///< grid-to-particle gather, deformation update, advection
+    double other = 0.0;     ///< time step, stability checks
+    double total() const { return topology + binning + p2g + grid + g2p + other; }
+};
+
+/// Grid update (thesis 3.20, 3.26, section 5): v = (mv) / m plus dt g on nodes with mass, then the
+/// colliders at time tEnd. Returns the largest node speed.
+float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders,
+                           const Vec3f& gravity, float dt, double tEnd);
+
 /// A blow-up or invalid state found during a substep; the message names frame, substep, particle and field.
 class SimulationError : public std::runtime_error {
 public:
@@ -100,6 +117,8 @@ public:
     int retryCount() const { return retriesTotal_; }
     std::size_t particleCount() const;
     float kernelInertiaScale() const;
+    const PhaseSeconds& phaseSeconds() const { return phases_; }
+    void resetPhaseSeconds() { phases_ = PhaseSeconds(); }
 
 private:
     struct Snapshot;
@@ -129,6 +148,7 @@ private:
     int32_t nextId_ = 0;
     double dtScale_ = 1.0;          ///< halved on each retry of the current frame
     int retriesTotal_ = 0;
+    PhaseSeconds phases_;
     bool energyReferenceSet_ = false;
     double energyMin_ = 0.0;        ///< lowest total energy since the last emission
     double energyScale_ = 0.0;      ///< largest kinetic + stored energy seen

@@ -66,12 +66,12 @@ void SparseGrid::configure(double dx, double baseShift, int stencilWidth) {
     stencilWidth_ = stencilWidth;
 }
 
-void SparseGrid::rebuild(std::vector<BinRequest>& requests) {
+void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
     Trees& t = *trees_;
 
     // 1. Leaves that hold particles (a union of per-task sets; the union does not depend on the split).
     t.particleLeaves.clear();
-    for (BinRequest& r : requests) {
+    for (const BinRequest& r : requests) {
         LeafCollector collect(*r.positions, *this);
         tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, r.positions->size(), kScanGrain), collect);
         t.particleLeaves.topologyUnion(collect.tree);
@@ -145,7 +145,12 @@ void SparseGrid::rebuild(std::vector<BinRequest>& requests) {
         }
     }
 
-    // 5. Stable counting sort of each species by leaf.
+}
+
+void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
+    const Trees& t = *trees_;
+    const std::size_t L = leaves_.size();
+    // Stable counting sort of each species by leaf.
     for (BinRequest& r : requests) {
         const std::vector<Vec3d>& x = *r.positions;
         const std::size_t N = x.size();

@@ -51,7 +51,14 @@ public:
     /// Bins all particles by the leaf holding their stencil's base node, allocates the leaves their
     /// stencils reach (own leaf plus the +x/+y/+z neighbours), releases the rest, and returns, for every
     /// species, a stable counting-sort permutation and each leaf's particle range.
-    void rebuild(std::vector<BinRequest>& requests);
+    void rebuild(std::vector<BinRequest>& requests) {
+        updateTopology(requests);
+        sortParticles(requests);
+    }
+    /// The first half of rebuild: the leaf set, its colours and neighbour tables ("topology update").
+    void updateTopology(const std::vector<BinRequest>& requests);
+    /// The second half: the counting sort of each species by leaf ("binning"); needs updateTopology first.
+    void sortParticles(std::vector<BinRequest>& requests);
 
     std::size_t leafCount() const { return leaves_.size(); }
     const LeafView& leaf(std::size_t i) const { return leaves_[i]; }

@@ -111,6 +111,48 @@ TEST(Materials, SvdGivesProperRotationsForInvertedF) {
     EXPECT_LT((s.U * s.sigma.asDiagonal() * s.V.transpose() - F).norm(), 1e-5f);
 }
 
+namespace {
+/// Checks one SVD: proper rotations, orthonormal factors, reconstruction, sorted |sigma|, and singular
+/// values equal to Eigen's JacobiSVD (the reference) to a tolerance relative to the largest.
+template <class T>
+void expectValidSvd(const Mat3T<T>& F, T tol) {
+    const Svd3<T> s = svd3<T>(F);
+    const Svd3<T> ref = jacobiSvd3<T>(F);
+    const T scale = std::max(T(1), F.norm());
+    EXPECT_NEAR(s.U.determinant(), T(1), tol);
+    EXPECT_NEAR(s.V.determinant(), T(1), tol);
+    EXPECT_LT((s.U.transpose() * s.U - Mat3T<T>::Identity()).norm(), tol);
+    EXPECT_LT((s.V.transpose() * s.V - Mat3T<T>::Identity()).norm(), tol);
+    EXPECT_LT((s.U * s.sigma.asDiagonal() * s.V.transpose() - F).norm(), tol * scale) << F;
+    EXPECT_GE(std::abs(s.sigma[0]), std::abs(s.sigma[1]) - tol * scale);
+    EXPECT_GE(std::abs(s.sigma[1]), std::abs(s.sigma[2]) - tol * scale);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(s.sigma[k], ref.sigma[k], tol * scale) << F;
+}
+}  // namespace
+
+TEST(Svd, MatchesEigenJacobiOnRandomRepeatedTinyAndInvertedF) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (int n = 0; n < 200; ++n) {
+        Mat3d F;
+        for (int i = 0; i < 9; ++i) F(i / 3, i % 3) = u(rng);
+        expectValidSvd<double>(F, 1e-12);
+        expectValidSvd<float>(F.cast<float>(), 2e-5f);
+    }
+    for (int n = 0; n < 50; ++n) {
+        const Mat3d R1 = randomRotation(rng), R2 = randomRotation(rng);
+        // Repeated singular values (all three, and two), a rotation, tiny and zero ones, an inversion.
+        for (const Vec3d sigma : {Vec3d(1, 1, 1), Vec3d(2, 2, 0.5), Vec3d(1.5, 0.7, 0.7), Vec3d(1, 1e-6, 1e-7),
+                                  Vec3d(1, 1, 0), Vec3d(0.9, 0.8, -0.3), Vec3d(1e3, 1, 1e-3)}) {
+            const Mat3d F = R1 * sigma.asDiagonal() * R2.transpose();
+            expectValidSvd<double>(F, 1e-10);
+            expectValidSvd<float>(F.cast<float>(), 2e-5f);
+        }
+    }
+    expectValidSvd<float>(Mat3f::Identity(), 1e-6f);
+    expectValidSvd<float>(Mat3f::Zero(), 1e-6f);
+}
+
 TEST(NeoHookeanModel, InvertedElementIsReportedNotClamped) {
     NeoHookean::State s;
     s.appendRest(1);

@@ -1,0 +1,206 @@
+// Scene-level performance driver (issue 6). Each measurement runs in a child process of its own, so that
+// its peak memory is its own and no run warms the next one's caches or allocator.
+//   mpm_bench one --material jelly --particles 1e6 --threads 2      one measurement, one CSV row
+//   mpm_bench output --particles 1e6                                the cost of writing a frame
+//   mpm_bench suite -o DIR [--quick]                                everything, into DIR/perf.csv
+// Rows: particle-substeps per second (PSS), memory per particle and each phase's share of a substep.
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "BenchScene.h"
+#include "Machine.h"
+#include "io/VdbWriter.h"
+
+using namespace mpm;
+using namespace mpm::bench;
+
+namespace {
+
+const char* kHeader =
+    "experiment,material,kernel,particles,blobs,spread_cells,threads,substeps,seconds,pss,net_bytes_per_particle,"
+    "peak_rss_mb,share_topology,share_binning,share_p2g,share_grid,share_g2p,share_other";
+
+/// A field of /proc/self/status in bytes (VmRSS, VmHWM), 0 where there is none.
+double procStatusBytes(const char* field) {
+    std::ifstream in("/proc/self/status");
+    for (std::string line; std::getline(in, line);)
+        if (line.rfind(field, 0) == 0) return 1024.0 * std::stod(line.substr(std::strlen(field) + 1));
+    return 0.0;
+}
+
+struct Options {
+    std::string experiment = "throughput";
+    BenchScene scene;
+    std::string kernel = "quadratic";
+    int threads = 1;
+    int substeps = 10;
+    int warmup = 3;
+};
+
+/// One timed run: warm-up substeps (allocation, the first full sort), then `substeps` timed ones.
+std::string measureSubsteps(const Options& o) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(o.threads));
+    const double rssBefore = procStatusBytes("VmRSS:");
+    auto sim = makeBenchSimulation(o.scene);
+    const double n = double(sim->particleCount());
+    for (int s = 0; s < o.warmup; ++s) sim->substep(kTargetDt);
+    sim->resetPhaseSeconds();
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int s = 0; s < o.substeps; ++s) sim->substep(kTargetDt);
+    const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double peak = procStatusBytes("VmHWM:");
+    const PhaseSeconds& ph = sim->phaseSeconds();
+    const double total = ph.total();
+    std::ostringstream row;
+    row << o.experiment << ',' << o.scene.material << ',' << o.kernel << ',' << long(n) << ',' << o.scene.blobs << ','
+        << o.scene.spreadCells << ',' << o.threads << ',' << o.substeps << ',' << sec << ',' << n * o.substeps / sec << ','
+        << (peak - rssBefore) / n << ',' << peak / 1048576.0 << ',' << ph.topology / total << ',' << ph.binning / total << ','
+        << ph.p2g / total << ',' << ph.grid / total << ',' << ph.g2p / total << ',' << ph.other / total;
+    return row.str();
+}
+
+/// Writes one frame's points, then its surface, of a settled block; PSS holds particles written per second.
+std::vector<std::string> measureOutput(const Options& o) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(o.threads));
+    auto sim = makeBenchSimulation(o.scene);
+    sim->substep(kTargetDt);
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("mpm_bench_output_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    std::vector<std::string> rows;
+    for (const char* what : {"points", "surface"}) {
+        VdbFrameRequest r;
+        r.volumePath = (dir / (std::string(what) + ".vdb")).string();
+        r.points = std::string(what) == "points";
+        r.surface = !r.points;
+        r.pointVoxelSize = kDx;
+        r.surfaceVoxelSize = 0.5 * kDx;  // the particle spacing at 8 per cell
+        r.surfaceRadius = 0.5 * kDx;
+        r.surfaces = {SurfaceGroup{"surface", {0}}};
+        r.materialOfSpecies = {0};
+        r.materialNames = {o.scene.material};
+        r.setNames = {"block"};
+        const auto t0 = std::chrono::steady_clock::now();
+        const std::size_t written = writeVdbFrame(r, sim->species());
+        const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::ostringstream row;
+        row << "output_" << what << ',' << o.scene.material << ",," << written << ",1,0," << o.threads << ",1," << sec << ','
+            << double(written) / sec << ",," << procStatusBytes("VmHWM:") / 1048576.0 << ",,,,,,";
+        rows.push_back(row.str());
+    }
+    std::filesystem::remove_all(dir);
+    return rows;
+}
+
+/// Runs this program again with `args` and returns the rows it printed.
+std::vector<std::string> runChild(const std::string& args) {
+    const std::string cmd = std::filesystem::read_symlink("/proc/self/exe").string() + " " + args;
+    std::vector<std::string> rows;
+    FILE* pipe = ::popen(cmd.c_str(), "r");
+    if (!pipe) throw std::runtime_error("cannot run " + cmd);
+    char buf[4096];
+    while (std::fgets(buf, sizeof buf, pipe)) {
+        std::string line(buf);
+        if (line.rfind("row,", 0) == 0) rows.push_back(line.substr(4, line.find_last_not_of("\r\n") - 3));
+    }
+    if (::pclose(pipe) != 0) throw std::runtime_error("benchmark run failed: " + cmd);
+    return rows;
+}
+
+void suite(const std::string& outDir, bool quick) {
+    const int all = int(tbb::info::default_concurrency());
+    const long million = quick ? 100000 : 1000000;
+    std::vector<std::string> runs;
+    auto add = [&](const std::string& exp, const std::string& material, const std::string& kernel, long n, int threads,
+                   const std::string& extra = "") {
+        std::ostringstream a;
+        a << "one --experiment " << exp << " --material " << material << " --kernel " << kernel << " --particles " << n
+          << " --threads " << threads << ' ' << extra;
+        runs.push_back(a.str());
+    };
+    // Throughput: every material with the quadratic kernel, water and jelly with the cubic one, 1 and all threads.
+    for (const char* m : {"water", "jelly", "rubber", "snow", "sand"})
+        for (int t : {1, all}) add("throughput", m, "quadratic", million, t);
+    for (const char* m : {"water", "jelly"})
+        for (int t : {1, all}) add("throughput", m, "cubic", million, t);
+    // Strong scaling: PSS against thread count.
+    for (const char* m : {"water", "jelly"})
+        for (int t = 1; t <= all; ++t) add("strong", m, "quadratic", million, t);
+    // Weak scaling: PSS and memory against particle count.
+    for (long n : {10000L, 30000L, 100000L, 300000L, 1000000L, 3000000L, 10000000L})
+        if (!quick || n <= 1000000L) add("weak", "water", "quadratic", n, all, n >= 3000000L ? "--substeps 5" : "");
+    // Sparsity: eight blobs over an ever larger cube; time and memory must not follow the spread.
+    for (double spread : {1e2, 1e3, 1e4, 1e5, 1e6})
+        add("sparsity", "water", "quadratic", million, all, "--blobs 8 --spread " + std::to_string(spread));
+    // Frame output, apart from simulation.
+    std::ostringstream out;
+    out << "output --material water --particles " << million << " --threads " << all;
+    runs.push_back(out.str());
+
+    std::filesystem::create_directories(outDir);
+    std::ofstream csv(outDir + "/perf.csv");
+    csv << kHeader << '\n';
+    for (const std::string& r : runs) {
+        std::cerr << "mpm_bench " << r << '\n';
+        for (const std::string& row : runChild(r)) {
+            csv << row << '\n' << std::flush;
+            std::cerr << "  " << row << '\n';
+        }
+    }
+    std::ofstream machine(outDir + "/machine.txt");
+    machine << "cpu: " << cpuModel() << "\nhardware threads: " << std::thread::hardware_concurrency()
+            << "\ncompiler: " << MPM_COMPILER << "\nflags: " << MPM_BUILD_FLAGS << '\n';
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"mpm_bench: particle-substeps per second, scaling, memory and phase breakdown"};
+    app.require_subcommand(1);
+    Options o;
+    std::string outDir = "docs/performance";
+    bool quick = false;
+    auto addScene = [&](CLI::App* c) {
+        c->add_option("--material", o.scene.material, "water, jelly, rubber, snow or sand");
+        c->add_option("--kernel", o.kernel, "quadratic or cubic")->check(CLI::IsMember({"quadratic", "cubic"}));
+        c->add_option("--particles", o.scene.particles, "particle count (rounded to a cube per blob)");
+        c->add_option("--threads", o.threads, "worker threads")->check(CLI::PositiveNumber);
+        c->add_option("--blobs", o.scene.blobs, "1 block or 8 blobs")->check(CLI::IsMember({1, 8}));
+        c->add_option("--spread", o.scene.spreadCells, "edge of the cube the 8 blobs sit on, in cells");
+    };
+    CLI::App* one = app.add_subcommand("one", "one timed run; prints one CSV row");
+    addScene(one);
+    one->add_option("--experiment", o.experiment, "label of the row");
+    one->add_option("--substeps", o.substeps, "timed substeps")->check(CLI::PositiveNumber);
+    one->add_option("--warmup", o.warmup, "untimed substeps first");
+    CLI::App* output = app.add_subcommand("output", "time writing one frame's points and surface");
+    addScene(output);
+    CLI::App* all = app.add_subcommand("suite", "every experiment, each in its own process, into DIR/perf.csv");
+    all->add_option("-o,--out", outDir, "output directory");
+    all->add_flag("--quick", quick, "1e5 instead of 1e6 particles, no runs above 1e6 (a smoke run)");
+    CLI11_PARSE(app, argc, argv);
+    try {
+        o.scene.kernel = o.kernel == "cubic" ? Interpolation::Cubic : Interpolation::Quadratic;
+        if (*one) std::printf("row,%s\n", measureSubsteps(o).c_str());
+        if (*output)
+            for (const std::string& r : measureOutput(o)) std::printf("row,%s\n", r.c_str());
+        if (*all) suite(outDir, quick);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "mpm_bench: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}
