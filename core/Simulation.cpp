@@ -6,6 +6,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <type_traits>
 #include <sstream>
 
 namespace mpm {
@@ -108,14 +110,27 @@ void Simulation::refreshSpeedBound() {
 
 template <class S>
 void Simulation::permute(S& sp, const std::vector<uint32_t>& dest) {
+    // One byte buffer, sized for the widest attribute, serves every array in turn: a scratch array per
+    // attribute type would cost as much memory as the particles themselves.
+    // Sized once for the widest, so that no smaller buffer is left behind in the allocator.
+    std::size_t widest = 0;
+    sp.forEachArray([&](auto& arr) { widest = std::max(widest, arr.size() * sizeof(arr[0])); });
+    if (scratch_.size() < widest) {
+        scratch_.clear();
+        scratch_.shrink_to_fit();
+        scratch_.resize(widest);
+    }
     sp.forEachArray([&](auto& arr) {
         using T = typename std::decay_t<decltype(arr)>::value_type;
-        auto& tmp = std::get<std::vector<T>>(scratch_);
-        tmp.resize(arr.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, arr.size(), kPermuteGrain), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) tmp[dest[i]] = arr[i];
+        static_assert(std::is_trivially_destructible_v<T>, "particle attributes are plain values");
+        const std::size_t n = arr.size();
+        std::byte* tmp = scratch_.data();
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kPermuteGrain), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) std::memcpy(tmp + dest[i] * sizeof(T), &arr[i], sizeof(T));
         });
-        arr.swap(tmp);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kPermuteGrain), [&](const auto& r) {
+            std::memcpy(static_cast<void*>(arr.data() + r.begin()), tmp + r.begin() * sizeof(T), r.size() * sizeof(T));
+        });
     });
 }
 

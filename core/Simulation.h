@@ -5,7 +5,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
-#include <tuple>
+#include <cstddef>
 #include <vector>
 
 #include "core/Collider.h"
@@ -152,9 +152,7 @@ private:
     bool energyReferenceSet_ = false;
     double energyMin_ = 0.0;        ///< lowest total energy since the last emission
     double energyScale_ = 0.0;      ///< largest kinetic + stored energy seen
-    std::tuple<std::vector<Vec3d>, std::vector<Vec3f>, std::vector<Mat3f>, std::vector<float>, std::vector<int32_t>,
-               std::vector<uint16_t>>
-        scratch_;
+    std::vector<std::byte> scratch_;  ///< permutation buffer, shared by every particle array
 };
 
 }  // namespace mpm

@@ -25,7 +25,19 @@ struct Water {
         void appendRest(std::size_t n) { J.resize(J.size() + n, 1.0f); }
     };
 
-    static float pressure(const Params& m, float J) { return m.bulkModulus * (std::pow(J, -m.gamma) - 1.0f); }
+    static float pressure(const Params& m, float J) { return m.bulkModulus * (powNegative(J, m.gamma) - 1.0f); }
+
+    /// J^-gamma; integer exponents (the usual 4 and 7) by repeated squaring, since powf dominated water's stress.
+    static float powNegative(float J, float gamma) {
+        constexpr float kLargestIntegerExponent = 16.0f;
+        if (gamma >= 1.0f && gamma <= kLargestIntegerExponent && gamma == float(int(gamma))) {
+            float r = 1.0f, b = 1.0f / J;
+            for (int e = int(gamma); e > 0; e >>= 1, b *= b)
+                if (e & 1) r *= b;
+            return r;
+        }
+        return std::pow(J, -gamma);
+    }
 
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
         const float J = s.J[i];

@@ -10,6 +10,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <limits>
 
 namespace mpm {
 
@@ -37,9 +38,14 @@ struct LeafCollector {
     LeafCollector(LeafCollector& o, tbb::split) : x(o.x), grid(o.grid) {}
     void operator()(const tbb::blocked_range<std::size_t>& r) {
         openvdb::tree::ValueAccessor<LeafMaskTree> acc(tree);
+        // Particles are sorted by leaf from the last substep: runs of one leaf need one tree access.
+        openvdb::Coord last(std::numeric_limits<int32_t>::max());
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3i b = grid.baseNode(x[i]);
-            acc.setValueOn(openvdb::Coord(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2));
+            const openvdb::Coord c(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2);
+            if (c == last) continue;
+            acc.setValueOn(c);
+            last = c;
         }
     }
     void join(LeafCollector& o) { tree.topologyUnion(o.tree); }
@@ -165,9 +171,15 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
             openvdb::tree::ValueAccessor<const LeafIndexTree> idx(t.leafIndex);
             uint32_t* hist = histogram_.data() + c * L;
             const std::size_t end = std::min(N, (c + 1) * chunkSize);
+            openvdb::Coord last(std::numeric_limits<int32_t>::max());
+            uint32_t l = 0;
             for (std::size_t i = c * chunkSize; i < end; ++i) {
                 const Vec3i b = baseNode(x[i]);
-                const uint32_t l = uint32_t(idx.getValue(openvdb::Coord(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2)));
+                const openvdb::Coord leafCoord(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2);
+                if (leafCoord != last) {  // as above, runs of one leaf share one lookup
+                    l = uint32_t(idx.getValue(leafCoord));
+                    last = leafCoord;
+                }
                 leafIdScratch_[i] = l;
                 ++hist[l];
             }

@@ -21,6 +21,13 @@ inline constexpr int kLeafNodes = kLeafDim * kLeafDim * kLeafDim;
 /// Offset of node (x, y, z), each in [0, 8), inside a leaf buffer (OpenVDB's x-major order).
 inline int leafOffset(int x, int y, int z) { return (x << (2 * kLeafLog2)) | (y << kLeafLog2) | z; }
 
+/// floor(t) as an int without a libm call (the portable x86-64 baseline has no SSE4.1 round instruction);
+/// exact for |t| < 2^31, which bounds the grid anyway.
+inline int floorToInt(double t) {
+    const int i = int(t);  // truncates towards zero
+    return i - (t < double(i));
+}
+
 /// Raw view of one leaf: its buffers and the integer coordinate of its first node.
 struct LeafView {
     float* mass = nullptr;
@@ -77,8 +84,8 @@ public:
 
     /// Base node of a particle's stencil.
     Vec3i baseNode(const Vec3d& x) const {
-        return Vec3i(int(std::floor(x[0] * invDx_ - baseShift_)), int(std::floor(x[1] * invDx_ - baseShift_)),
-                     int(std::floor(x[2] * invDx_ - baseShift_)));
+        return Vec3i(floorToInt(x[0] * invDx_ - baseShift_), floorToInt(x[1] * invDx_ - baseShift_),
+                     floorToInt(x[2] * invDx_ - baseShift_));
     }
 
 private:

@@ -46,12 +46,12 @@ struct Stencil {
     float dw[3][K::kWidth];
     float d[3][K::kWidth];
 
-    Stencil(const Vec3d& x, double invDx, float dx, const Vec3i& leafOrigin) {
+    [[gnu::always_inline]] Stencil(const Vec3d& x, double invDx, float dx, const Vec3i& leafOrigin) {
         for (int a = 0; a < 3; ++a) {
             const double g = x[a] * invDx;
-            const double base = std::floor(g - K::kBaseShift);
-            fx[a] = float(g - base);  // exact up to double rounding, far from the origin too
-            local[a] = int(base) - leafOrigin[a];
+            const int base = floorToInt(g - K::kBaseShift);
+            fx[a] = float(g - double(base));  // exact up to double rounding, far from the origin too
+            local[a] = base - leafOrigin[a];
             K::weights(fx[a], w[a], dw[a]);
             for (int i = 0; i < K::kWidth; ++i) d[a][i] = (float(i) - fx[a]) * dx;
         }

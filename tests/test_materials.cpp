@@ -142,7 +142,7 @@ TEST(Svd, MatchesEigenJacobiOnRandomRepeatedTinyAndInvertedF) {
     for (int n = 0; n < 50; ++n) {
         const Mat3d R1 = randomRotation(rng), R2 = randomRotation(rng);
         // Repeated singular values (all three, and two), a rotation, tiny and zero ones, an inversion.
-        for (const Vec3d sigma : {Vec3d(1, 1, 1), Vec3d(2, 2, 0.5), Vec3d(1.5, 0.7, 0.7), Vec3d(1, 1e-6, 1e-7),
+        for (const Vec3d& sigma : {Vec3d(1, 1, 1), Vec3d(2, 2, 0.5), Vec3d(1.5, 0.7, 0.7), Vec3d(1, 1e-6, 1e-7),
                                   Vec3d(1, 1, 0), Vec3d(0.9, 0.8, -0.3), Vec3d(1e3, 1, 1e-3)}) {
             const Mat3d F = R1 * sigma.asDiagonal() * R2.transpose();
             expectValidSvd<double>(F, 1e-10);
