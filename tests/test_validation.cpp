@@ -33,3 +33,9 @@ TEST(Validation, DamBreakFrontFollowsMartinAndMoyce) {
     const CaseResult r = run("dam_break");  // a / dx = 8
     EXPECT_LT(r.error, 0.10) << r.detail;
 }
+
+TEST(Validation, SandPileAngleOfReposeWithinBandForThirtyDegrees) {
+    // Case 8: a low column of phi = 30 degree sand settles to an angle in [phi - 3, phi + 6].
+    const CaseResult r = run("angle_of_repose_30");
+    EXPECT_TRUE(r.pass) << "angle " << r.error << " " << r.detail;
+}
