@@ -110,9 +110,9 @@ void Simulation::refreshSpeedBound() {
 
 template <class S>
 void Simulation::permute(S& sp, const std::vector<uint32_t>& dest) {
-    // One byte buffer, sized for the widest attribute, serves every array in turn: a scratch array per
-    // attribute type would cost as much memory as the particles themselves.
-    // Sized once for the widest, so that no smaller buffer is left behind in the allocator.
+    // One byte buffer, sized once for the widest attribute, serves every array in turn: a scratch array
+    // per attribute type would cost as much memory as the particles themselves, and growing it in steps
+    // would leave the smaller buffers behind in the allocator.
     std::size_t widest = 0;
     sp.forEachArray([&](auto& arr) { widest = std::max(widest, arr.size() * sizeof(arr[0])); });
     if (scratch_.size() < widest) {
