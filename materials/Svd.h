@@ -56,6 +56,7 @@ inline constexpr int kMaxSweeps = 8;
 template <class T>
 struct Columns {
     T c[3][3];  ///< c[column][row]
+    static Columns identity() { return Columns{{{T(1), T(0), T(0)}, {T(0), T(1), T(0)}, {T(0), T(0), T(1)}}}; }
     T dot(int p, int q) const { return c[p][0] * c[q][0] + c[p][1] * c[q][1] + c[p][2] * c[q][2]; }
     /// Column p <- cs * p - sn * q, column q <- sn * p + cs * q.
     void rotate(int p, int q, T cs, T sn) {
@@ -115,9 +116,7 @@ template <class T>
 Svd3<T> svd3(const Mat3T<T>& F) {
     using namespace svd_detail;
     // 1. V by one-sided Jacobi: rotate B = F V until its columns are orthogonal (V diagonalises F^T F).
-    Columns<T> B, V{{{1, 0, 0}, {0, 1, 0}}};
-    V.c[2][0] = V.c[2][1] = T(0);
-    V.c[2][2] = T(1);
+    Columns<T> B, V = Columns<T>::identity();
     for (int col = 0; col < 3; ++col)
         for (int row = 0; row < 3; ++row) B.c[col][row] = F(row, col);
     for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
@@ -139,9 +138,7 @@ Svd3<T> svd3(const Mat3T<T>& F) {
     order(1, 2);
     // 3. QR of B by Givens rotations: R is diagonal up to round-off, U = Q is a proper rotation, and
     //    R(2, 2) keeps the sign of det F.
-    Columns<T> U{{{1, 0, 0}, {0, 1, 0}}};
-    U.c[2][0] = U.c[2][1] = T(0);
-    U.c[2][2] = T(1);
+    Columns<T> U = Columns<T>::identity();
     givensZero(B, U, 0, 1, 0);
     givensZero(B, U, 0, 2, 0);
     givensZero(B, U, 1, 2, 1);

@@ -29,6 +29,12 @@ using MomentumTree = openvdb::tree::Tree4<openvdb::Vec3s, 4, 3, 3>::Type;
 using LeafIndexTree = openvdb::tree::Tree4<int32_t, 3, 3, 3>::Type;
 using LeafMaskTree = openvdb::tree::Tree4<openvdb::ValueMask, 3, 3, 3>::Type;
 
+/// Coordinate of the leaf holding a particle's stencil base node (one voxel per leaf in the coarse trees).
+openvdb::Coord leafCoordOf(const SparseGrid& grid, const Vec3d& x) {
+    const Vec3i b = grid.baseNode(x);
+    return openvdb::Coord(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2);
+}
+
 /// Collects the set of leaf coordinates (base node >> 3) that hold particles.
 struct LeafCollector {
     const std::vector<Vec3d>& x;
@@ -41,8 +47,7 @@ struct LeafCollector {
         // Particles are sorted by leaf from the last substep: runs of one leaf need one tree access.
         openvdb::Coord last(std::numeric_limits<int32_t>::max());
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const Vec3i b = grid.baseNode(x[i]);
-            const openvdb::Coord c(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2);
+            const openvdb::Coord c = leafCoordOf(grid, x[i]);
             if (c == last) continue;
             acc.setValueOn(c);
             last = c;
@@ -174,8 +179,7 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
             openvdb::Coord last(std::numeric_limits<int32_t>::max());
             uint32_t l = 0;
             for (std::size_t i = c * chunkSize; i < end; ++i) {
-                const Vec3i b = baseNode(x[i]);
-                const openvdb::Coord leafCoord(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2);
+                const openvdb::Coord leafCoord = leafCoordOf(*this, x[i]);
                 if (leafCoord != last) {  // as above, runs of one leaf share one lookup
                     l = uint32_t(idx.getValue(leafCoord));
                     last = leafCoord;

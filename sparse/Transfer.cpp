@@ -176,9 +176,12 @@ void gatherSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, do
         C << b0[0], b1[0], b2[0], b0[1], b1[1], b2[1], b0[2], b1[2], b2[2];
         C *= Dinv;
         Mat3f gradV;
-        if constexpr (MLS) gradV = C;
-        else gradV << g0[0], g1[0], g2[0], g0[1], g1[1], g2[1], g0[2], g1[2], g2[2];
-        if constexpr (!MLS) gradV *= finvDx;
+        if constexpr (MLS) {
+            gradV = C;
+        } else {
+            gradV << g0[0], g1[0], g2[0], g0[1], g1[1], g2[1], g0[2], g1[2], g2[2];
+            gradV *= finvDx;
+        }
         P.v[p] = vp;
         P.C[p] = apic ? C : Mat3f::Zero();
         M::updateDeformation(sp.params, sp.state, p, gradV, dt);
