@@ -189,13 +189,14 @@ const std::vector<Preset>& presets() {
     static const std::vector<Preset> table = {
         {"water",
          [](Node& n, const ParticleSetDesc& set, float& density) {
-             n.expect({"density", "bulk_modulus", "gamma"});
+             n.expect({"density", "bulk_modulus", "gamma", "tension"});
              Species<Water> s;
              Water::Params& p = s.params;
              p.density = float(n.number("density", p.density, kTiny, kHuge, "kg/m^3"));
              // lambda_scale scales the bulk modulus, water's only Lame-like parameter.
              p.bulkModulus = float(n.number("bulk_modulus", p.bulkModulus, 0.0, kHuge, "Pa") * set.lambdaScale);
              p.gamma = float(n.number("gamma", p.gamma, 1.0, 20.0));
+             p.tension = n.boolean("tension", p.tension);
              density = p.density;
              return AnySpecies(std::move(s));
          }},

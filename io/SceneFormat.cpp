@@ -70,7 +70,9 @@ Particle volume is the shape volume divided by the particle count; mass is volum
 
 ### material presets and their parameters (`material_params`)
 - **water**: density 1000 kg/m^3, bulk_modulus 5e4 Pa, gamma 4 (the thesis's k = 50 at rho = 1, scaled
-  with the density so that the sound speed sqrt(k gamma / rho) = 14.1 m/s is the same).
+  with the density so that the sound speed sqrt(k gamma / rho) = 14.1 m/s is the same), tension false
+  (water holds no tension: expansion past the rest volume is a free surface or spray, J is clamped to 1;
+  true keeps the thesis's EOS, whose negative pressure makes free-surface water cohesive).
 - **jelly** (fixed corotated) and **rubber** (neo-Hookean): density 400, youngs_modulus 1.4e5 Pa,
   poisson_ratio 0.2. Neo-Hookean is undefined for inverted elements (J <= 0): such a run stops with the
   particle, frame and substep named.

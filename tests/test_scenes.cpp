@@ -42,20 +42,24 @@ TEST(SceneChecks, WaterPouredOnJellyDeformsItAndIsPushedBack) {
     for (int f = 0; f < scene.frames; ++f) {
         sim->advanceFrame();
         lowestTop = std::min(lowestTop, topOfJellyCentre());
-        // Water that runs off the sides falls to the floor; above the jelly's inner footprint it must not sink in.
+        // Water that runs off the sides falls to the floor; only the water above the jelly's inner footprint
+        // is held by the jelly: it must not sink in, and it is what the jelly pushes back.
         double minY = 1.0, vy = 0.0;
-        for (std::size_t i = 0; i < water.size(); ++i) {
-            vy += water.v[i][1] / double(water.size());
-            if (std::abs(water.x[i][0]) < 0.12 && std::abs(water.x[i][2]) < 0.12) minY = std::min(minY, water.x[i][1]);
-        }
+        int over = 0;
+        for (std::size_t i = 0; i < water.size(); ++i)
+            if (std::abs(water.x[i][0]) < 0.12 && std::abs(water.x[i][2]) < 0.12) {
+                minY = std::min(minY, water.x[i][1]);
+                vy += water.v[i][1];
+                ++over;
+            }
         if (minY < lowestWater) lowestWater = minY;
-        else waterVyAfterLowest = std::max(waterVyAfterLowest, vy);
+        else if (over > 0) waterVyAfterLowest = std::max(waterVyAfterLowest, vy / over);
     }
     // The water lands (the jelly top sits at 0.12) and dents the jelly by more than a cell's worth of strain.
     EXPECT_LT(lowestTop, restTop - 0.01) << "the jelly should give under the water";
     // The jelly holds the water up: over the jelly no water sinks more than a cell below the dented top,
-    // and after the water's lowest point its mean vertical velocity turns upward (measured +0.05 m/s;
-    // the top dips from 0.120 to 0.103 m).
+    // and after the water's lowest point the mean vertical velocity of the water over the jelly turns
+    // upward (measured +0.11 m/s; the top dips from 0.120 to 0.103 m and rebounds to 0.119).
     EXPECT_GT(lowestWater, lowestTop - 0.02) << "water sank more than a cell into the jelly";
     EXPECT_GT(waterVyAfterLowest, 0.0) << "the jelly did not push the water back";
 }

@@ -40,6 +40,7 @@ struct ValidationCase {
     int maxLevel = 2;            ///< finest level the report runs for the baseline choice
     int maxLevelChoices = 2;     ///< finest level for the other choices (cost control)
     std::function<CaseResult(const CaseConfig&)> run;
+    double minOrder = 0.0;       ///< when > 0, a level passes only if log2(e(h) / e(h/2)) against the level before reaches it
 };
 
 /// Where scenes/validation/ lives (defaults to the source tree this was built from).

@@ -6,6 +6,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -64,10 +65,14 @@ int accuracy(const std::string& dir, const std::string& only, bool quick, int th
         if (!only.empty() && ("," + only + ",").find("," + vc.name + ",") == std::string::npos) continue;
         for (const auto& [name, cfg] : choices(quick)) {
             const int maxLevel = quick ? std::min(1, vc.maxLevel) : name == "baseline" ? vc.maxLevel : vc.maxLevelChoices;
+            double previousError = 0.0;
             for (int level = 0; level <= maxLevel; ++level) {
                 CaseConfig c = cfg;
                 c.level = level;
-                const CaseResult r = vc.run(c);
+                CaseResult r = vc.run(c);
+                // A convergence band: the observed order against the level before.
+                if (vc.minOrder > 0.0) r.pass = r.pass && level > 0 && std::log2(previousError / r.error) >= vc.minOrder;
+                previousError = r.error;
                 std::fprintf(stderr, "%-20s %-9s level %d dx %-9.4g particles %-8zu substeps %-7lld %7.2fs error %-11.4g %s\n",
                              vc.name.c_str(), name.c_str(), level, r.dx, r.particles, r.substeps, r.wallSeconds, r.error,
                              level < vc.passLevel ? "(below pass level)" : r.pass ? "pass" : "FAIL");
