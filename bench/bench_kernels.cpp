@@ -135,6 +135,18 @@ void BM_Svd(benchmark::State& st) {
 BENCHMARK_TEMPLATE(BM_Svd, svd3<float>)->Name("BM_Svd/mcadams_style");
 BENCHMARK_TEMPLATE(BM_Svd, jacobiSvd3<float>)->Name("BM_Svd/eigen_jacobi");
 
+void BM_SvdBatch(benchmark::State& st) {  // eight per call, in SIMD lanes
+    const std::vector<Mat3f> F = sampleF(4096);
+    Svd3<float> out[simd::kLanes];
+    for (auto _ : st)
+        for (std::size_t i = 0; i < F.size(); i += simd::kLanes) {
+            svd3Batch(&F[i], simd::kLanes, out);
+            benchmark::DoNotOptimize(out);
+        }
+    perParticle(st, long(F.size()));
+}
+BENCHMARK(BM_SvdBatch)->Name("BM_Svd/batch_of_8");
+
 /// The material work alone: Kirchhoff stress (P2G) and deformation update with return mapping (G2P).
 template <class M>
 void BM_Material(benchmark::State& st) {
@@ -147,12 +159,18 @@ void BM_Material(benchmark::State& st) {
     std::normal_distribution<float> g(0.0f, 1.0f);
     Mat3f gradV;
     for (int i = 0; i < 9; ++i) gradV(i / 3, i % 3) = g(rng);
+    const Mat3f gradVs[simd::kLanes] = {gradV, gradV, gradV, gradV, gradV, gradV, gradV, gradV};
+    Mat3f tau[simd::kLanes];
     for (auto _ : st) {
-        for (std::size_t i = 0; i < F.size(); ++i) {
-            if constexpr (requires { sp.state.F; }) sp.state.F[i] = F[i];
-            if constexpr (requires { sp.state.Fe; }) sp.state.Fe[i] = F[i];
-            sum += M::kirchhoff(sp.params, sp.state, i);
-            M::updateDeformation(sp.params, sp.state, i, gradV, float(kTargetDt));
+        // As the transfers call them: a batch of simd::kLanes particles at a time.
+        for (std::size_t i = 0; i < F.size(); i += simd::kLanes) {
+            for (std::size_t k = i; k < i + simd::kLanes; ++k) {
+                if constexpr (requires { sp.state.F; }) sp.state.F[k] = F[k];
+                if constexpr (requires { sp.state.Fe; }) sp.state.Fe[k] = F[k];
+            }
+            kirchhoffOfRange<M>(sp.params, sp.state, i, simd::kLanes, tau);
+            for (const Mat3f& t : tau) sum += t;
+            updateDeformationOfRange<M>(sp.params, sp.state, i, simd::kLanes, gradVs, float(kTargetDt));
         }
         benchmark::DoNotOptimize(sum);
     }

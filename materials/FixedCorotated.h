@@ -5,7 +5,7 @@
 //   tau = P F^T = 2 mu (F - R) F^T + lambda (J - 1) J I.
 #include <vector>
 
-#include "materials/Svd.h"
+#include "materials/SvdBatch.h"
 
 namespace mpm {
 
@@ -23,18 +23,25 @@ struct FixedCorotated {
     }
     /// tau = P F^T, which needs no inverse and stays finite for inverted F.
     template <class T>
-    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) {
-        const Svd3<T> s = svd3<T>(F);
+    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F, const Svd3<T>& s) {
         const Mat3T<T> R = s.U * s.V.transpose();
         const T J = s.sigma.prod();
         return T(2) * mu * (F - R) * F.transpose() + lambda * (J - T(1)) * J * Mat3T<T>::Identity();
     }
+    template <class T>
+    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) { return kirchhoffOf<T>(mu, lambda, F, svd3<T>(F)); }
     template <class T>
     static Mat3T<T> piola(T mu, T lambda, const Mat3T<T>& F) {
         return kirchhoffOf<T>(mu, lambda, F) * F.inverse().transpose();
     }
 
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.F[i]); }
+    /// kirchhoff for particles first .. first + n - 1 (n <= simd::kLanes), their SVDs in SIMD lanes.
+    static void kirchhoffBatch(const Params& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+        Svd3<float> d[simd::kLanes];
+        svd3Batch(&s.F[first], n, d);
+        for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m.mu, m.lambda, s.F[first + k], d[k]);
+    }
     static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) { s.update(i, gradV, dt); }
     static double energyDensity(const Params& m, const State& s, std::size_t i) {
         return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());

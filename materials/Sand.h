@@ -8,7 +8,7 @@
 #include <cmath>
 #include <vector>
 
-#include "materials/Svd.h"
+#include "materials/SvdBatch.h"
 
 namespace mpm {
 
@@ -73,8 +73,9 @@ struct Sand {
         return mu * e.squaredNorm() + T(0.5) * lambda * e.sum() * e.sum();
     }
     template <class T>
-    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) {
-        const Svd3<T> s = svd3<T>(F);
+    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) { return kirchhoffOf<T>(mu, lambda, svd3<T>(F)); }
+    template <class T>
+    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Svd3<T>& s) {
         const Vec3T<T> e = s.sigma.array().abs().log().matrix();
         const Vec3T<T> t = T(2) * mu * e + Vec3T<T>::Constant(lambda * e.sum());
         return s.U * t.asDiagonal() * s.U.transpose();
@@ -85,9 +86,28 @@ struct Sand {
     }
 
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.Fe[i]); }
+    /// kirchhoff for n <= simd::kLanes particles from first, their SVDs in SIMD lanes.
+    static void kirchhoffBatch(const Params& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+        Svd3<float> d[simd::kLanes];
+        svd3Batch(&s.Fe[first], n, d);
+        for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m.mu, m.lambda, d[k]);
+    }
+
+    /// Elastic predictor F_E trial = (I + dt grad v) F_E, then the return map.
     static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
         const Mat3f trial = (Mat3f::Identity() + dt * gradV) * s.Fe[i];
-        const Svd3<float> d = svd3<float>(trial);
+        returnMap(m, s, i, svd3<float>(trial));
+    }
+    static void updateDeformationBatch(const Params& m, State& s, std::size_t first, int n, const Mat3f* gradV, float dt) {
+        Mat3f trial[simd::kLanes];
+        for (int k = n; k < simd::kLanes; ++k) trial[k].setIdentity();  // unread, but GCC cannot see that
+        for (int k = 0; k < n; ++k) trial[k] = (Mat3f::Identity() + dt * gradV[k]) * s.Fe[first + k];
+        Svd3<float> d[simd::kLanes];
+        svd3Batch(trial, n, d);
+        for (int k = 0; k < n; ++k) returnMap(m, s, first + k, d[k]);
+    }
+    /// Project eps = ln Sigma of the trial F_E = U Sigma V^T (plus the volume correction) and harden.
+    static void returnMap(const Params& m, State& s, std::size_t i, const Svd3<float>& d) {
         Vec3f eps = d.sigma.array().abs().max(1e-12f).log().matrix();
         if (m.volumeCorrection) eps += Vec3f::Constant(s.logVc[i] / kDim);
         const Projection p = project(m, eps, s.alpha[i]);

@@ -39,11 +39,31 @@ struct Snow {
         const float h = hardening(m, s.Jp[i]);
         return FixedCorotated::kirchhoffOf<float>(m.mu * h, m.lambda * h, s.Fe[i]);
     }
+    /// kirchhoff for n <= simd::kLanes particles from first, their SVDs in SIMD lanes.
+    static void kirchhoffBatch(const Params& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+        Svd3<float> d[simd::kLanes];
+        svd3Batch(&s.Fe[first], n, d);
+        for (int k = 0; k < n; ++k) {
+            const float h = hardening(m, s.Jp[first + k]);
+            tau[k] = FixedCorotated::kirchhoffOf<float>(m.mu * h, m.lambda * h, s.Fe[first + k], d[k]);
+        }
+    }
 
-    /// Elastic predictor, then the return map: clamp sigma, push the clamped-away volume into J_P.
+    /// Elastic predictor F_E trial = (I + dt grad v) F_E, then the return map.
     static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
         const Mat3f trial = (Mat3f::Identity() + dt * gradV) * s.Fe[i];
-        Svd3<float> d = svd3<float>(trial);
+        returnMap(m, s, i, svd3<float>(trial));
+    }
+    static void updateDeformationBatch(const Params& m, State& s, std::size_t first, int n, const Mat3f* gradV, float dt) {
+        Mat3f trial[simd::kLanes];
+        for (int k = n; k < simd::kLanes; ++k) trial[k].setIdentity();  // unread, but GCC cannot see that
+        for (int k = 0; k < n; ++k) trial[k] = (Mat3f::Identity() + dt * gradV[k]) * s.Fe[first + k];
+        Svd3<float> d[simd::kLanes];
+        svd3Batch(trial, n, d);
+        for (int k = 0; k < n; ++k) returnMap(m, s, first + k, d[k]);
+    }
+    /// Clamp sigma of the trial F_E = U Sigma V^T, and push the clamped-away volume into J_P.
+    static void returnMap(const Params& m, State& s, std::size_t i, Svd3<float> d) {
         const float Jtrial = d.sigma.prod();
         for (int a = 0; a < 3; ++a) d.sigma[a] = std::clamp(d.sigma[a], 1.0f - m.thetaC, 1.0f + m.thetaS);
         s.Fe[i] = d.U * d.sigma.asDiagonal() * d.V.transpose();

@@ -9,8 +9,8 @@
 // where an eigensolver on F^T F loses half the digits), exact rotations and a convergence test. It is
 // 2.5x faster than Eigen's JacobiSVD here (bench/bench_kernels.cpp, BM_Svd: 211 against 519 ns) and as
 // robust for repeated, tiny and negative singular values (tests/test_materials.cpp). The rotations form
-// one serial chain of square roots and divisions, so a batched SIMD version across particles is the next
-// step. jacobiSvd3 keeps Eigen's answer as the reference the tests compare against.
+// one serial chain of square roots and divisions, so the transfers run eight of them at once in SIMD
+// lanes (SvdBatch.h). jacobiSvd3 keeps Eigen's answer as the reference the tests compare against.
 #include <Eigen/SVD>
 
 #include <cmath>

@@ -71,11 +71,15 @@ void scatterSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, d
     const float fdx = float(dx), finvDx = float(invDx);
     const float Dinv = K::kInverseInertia * finvDx * finvDx;
     const ParticleArrays& P = sp.p;
+    Mat3f stress[simd::kLanes];
     for (uint32_t p = begin; p < end; ++p) {
+        // Stresses a batch at a time: the SVD-based models evaluate theirs in SIMD lanes.
+        const uint32_t lane = (p - begin) % simd::kLanes;
+        if (lane == 0) kirchhoffOfRange<M>(sp.params, sp.state, p, int(std::min<uint32_t>(simd::kLanes, end - p)), stress);
+        const Mat3f& tau = stress[lane];
         const Stencil<K> st(P.x[p], invDx, fdx, origin);
         const float m = P.mass[p];
         const Vec3f mv = m * P.v[p];
-        const Mat3f tau = M::kirchhoff(sp.params, sp.state, p);
         const Mat3f A = MLS ? Mat3f(m * P.C[p] - (dt * P.volume0[p] * Dinv) * tau) : Mat3f(m * P.C[p]);
         const f4 q{m, mv[0], mv[1], mv[2]};
         const f4 ax = lanes123(A(0, 0), A(1, 0), A(2, 0)), ay = lanes123(A(0, 1), A(1, 1), A(2, 1)),
@@ -140,6 +144,7 @@ void gatherSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, do
     const float fdx = float(dx), finvDx = float(invDx);
     const float Dinv = K::kInverseInertia * finvDx * finvDx;
     ParticleArrays& P = sp.p;
+    Mat3f gradVs[simd::kLanes];
     for (uint32_t p = begin; p < end; ++p) {
         const Stencil<K> st(P.x[p], invDx, fdx, origin);
         f4 v{}, b0{}, b1{}, b2{}, g0{}, g1{}, g2{};  // v; columns of B; columns of grad v (per cell)
@@ -184,19 +189,27 @@ void gatherSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, do
         }
         P.v[p] = vp;
         P.C[p] = apic ? C : Mat3f::Zero();
-        M::updateDeformation(sp.params, sp.state, p, gradV, dt);
         P.x[p] += double(dt) * vp.cast<double>();
-        const float key = M::stiffnessKey(sp.state, p);
-        if (!(std::isfinite(vp[0]) && std::isfinite(vp[1]) && std::isfinite(vp[2]) && std::isfinite(key))) {
-            if (bad.badParticle < 0) {
-                bad.badSpecies = speciesIndex;
-                bad.badParticle = p;
-                bad.badField = std::isfinite(key) ? "velocity" : "deformation";
+        // Deformation updates a batch at a time: the SVD-based return maps run their SVDs in SIMD lanes.
+        const uint32_t lane = (p - begin) % simd::kLanes;
+        gradVs[lane] = gradV;
+        if (lane + 1 < simd::kLanes && p + 1 < end) continue;
+        const uint32_t first = p - lane;
+        updateDeformationOfRange<M>(sp.params, sp.state, first, int(lane + 1), gradVs, dt);
+        for (uint32_t q = first; q <= p; ++q) {
+            const float key = M::stiffnessKey(sp.state, q);
+            const Vec3f& vq = P.v[q];
+            if (!(std::isfinite(vq[0]) && std::isfinite(vq[1]) && std::isfinite(vq[2]) && std::isfinite(key))) {
+                if (bad.badParticle < 0) {
+                    bad.badSpecies = speciesIndex;
+                    bad.badParticle = q;
+                    bad.badField = std::isfinite(key) ? "velocity" : "deformation";
+                }
+                continue;
             }
-            continue;
+            maxSpeed = std::max(maxSpeed, vq.norm());
+            minKey = std::min(minKey, key);
         }
-        maxSpeed = std::max(maxSpeed, vp.norm());
-        minKey = std::min(minKey, key);
     }
 }
 

@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "core/Species.h"
 #include "materials/Materials.h"
 
 using namespace mpm;
@@ -151,6 +152,97 @@ TEST(Svd, MatchesEigenJacobiOnRandomRepeatedTinyAndInvertedF) {
     }
     expectValidSvd<float>(Mat3f::Identity(), 1e-6f);
     expectValidSvd<float>(Mat3f::Zero(), 1e-6f);
+}
+
+TEST(Svd, BatchOfEightMatchesOneAtATime) {
+    // The SIMD lanes run svd3's operations with identity rotations where a lane needs none, so every
+    // lane must give svd3's singular values and a valid SVD, whatever its neighbours hold: here a
+    // batch mixes random, repeated, tiny, zero, inverted and NaN matrices, and a short batch pads.
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::vector<Mat3f> F;
+    for (int n = 0; n < 64; ++n) {
+        Mat3f f;
+        for (int i = 0; i < 9; ++i) f(i / 3, i % 3) = u(rng);
+        F.push_back(f);
+        const Mat3d R1 = randomRotation(rng), R2 = randomRotation(rng);
+        const Vec3d sigmas[] = {Vec3d(1, 1, 1), Vec3d(2, 2, 0.5), Vec3d(1, 1e-6, 1e-7), Vec3d(1, 1, 0), Vec3d(0.9, 0.8, -0.3)};
+        F.push_back((R1 * sigmas[n % 5].asDiagonal() * R2.transpose()).cast<float>());
+    }
+    F.push_back(Mat3f::Identity());
+    F.push_back(Mat3f::Zero());
+    for (std::size_t first = 0; first < F.size(); first += simd::kLanes) {
+        const int n = int(std::min<std::size_t>(simd::kLanes, F.size() - first));
+        Svd3<float> batch[simd::kLanes];
+        svd3Batch(&F[first], n, batch);
+        for (int k = 0; k < n; ++k) {
+            const Svd3<float> one = svd3<float>(F[first + k]);
+            EXPECT_TRUE(batch[k].sigma.isApprox(one.sigma, 1e-5f) || (batch[k].sigma - one.sigma).norm() < 1e-6f) << first + k;
+            // U and V are unique only up to the repeated-value subspaces, so check them as an SVD.
+            const Svd3<float>& b = batch[k];
+            EXPECT_LT((b.U * b.sigma.asDiagonal() * b.V.transpose() - F[first + k]).norm(), 1e-5f * (1.0f + F[first + k].norm())) << first + k;
+            EXPECT_NEAR(b.U.determinant(), 1.0f, 1e-5f) << first + k;
+            EXPECT_NEAR(b.V.determinant(), 1.0f, 1e-5f) << first + k;
+            EXPECT_LT((b.U.transpose() * b.U - Mat3f::Identity()).norm(), 1e-5f) << first + k;
+            EXPECT_LT((b.V.transpose() * b.V - Mat3f::Identity()).norm(), 1e-5f) << first + k;
+        }
+    }
+    // A NaN lane stays NaN and does not spill into its neighbours.
+    std::vector<Mat3f> withNaN(F.begin(), F.begin() + simd::kLanes);
+    withNaN[3](1, 2) = std::numeric_limits<float>::quiet_NaN();
+    Svd3<float> out[simd::kLanes];
+    svd3Batch(withNaN.data(), simd::kLanes, out);
+    EXPECT_FALSE(out[3].sigma.allFinite());
+    for (int k = 0; k < simd::kLanes; ++k) {
+        if (k == 3) continue;
+        EXPECT_TRUE(out[k].sigma.isApprox(svd3<float>(withNaN[k]).sigma, 1e-5f)) << k;
+    }
+}
+
+/// The batched stress and return map of an SVD-based model agree with its one-particle versions.
+template <class M>
+void expectBatchMatchesScalar() {
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(-0.3f, 0.3f);
+    const int n = 13;  // one full batch and a short one
+    Species<M> one, batch;
+    if constexpr (requires { one.state.appendRest(n, one.params); }) {
+        one.state.appendRest(n, one.params);
+        batch.state.appendRest(n, batch.params);
+    } else {
+        one.state.appendRest(n);
+        batch.state.appendRest(n);
+    }
+    std::vector<Mat3f> gradV(n);
+    for (int i = 0; i < n; ++i) {
+        Mat3f F = Mat3f::Identity();
+        for (int k = 0; k < 9; ++k) F(k / 3, k % 3) += u(rng), gradV[i](k / 3, k % 3) = 10.0f * u(rng);
+        if constexpr (requires { one.state.F; }) one.state.F[i] = batch.state.F[i] = F;
+        else one.state.Fe[i] = batch.state.Fe[i] = F;
+    }
+    const float dt = 1e-3f;
+    for (int first = 0; first < n; first += simd::kLanes) {
+        const int m = std::min(simd::kLanes, n - first);
+        Mat3f tau[simd::kLanes];
+        kirchhoffOfRange<M>(batch.params, batch.state, first, m, tau);
+        for (int k = 0; k < m; ++k) {
+            const Mat3f ref = M::kirchhoff(one.params, one.state, first + k);
+            EXPECT_LT((tau[k] - ref).norm(), 1e-4f * (1.0f + ref.norm())) << M::kName << " " << first + k;
+        }
+        updateDeformationOfRange<M>(batch.params, batch.state, first, m, &gradV[first], dt);
+        for (int k = 0; k < m; ++k) M::updateDeformation(one.params, one.state, first + k, gradV[first + k], dt);
+    }
+    for (int i = 0; i < n; ++i) {
+        EXPECT_NEAR(M::stiffnessKey(batch.state, i), M::stiffnessKey(one.state, i), 1e-5f) << M::kName << " " << i;
+        EXPECT_NEAR(M::volumeRatio(batch.state, i), M::volumeRatio(one.state, i), 1e-5f) << M::kName << " " << i;
+    }
+}
+
+TEST(MaterialBatch, StressAndReturnMapMatchOneParticleAtATime) {
+    expectBatchMatchesScalar<FixedCorotated>();
+    expectBatchMatchesScalar<Snow>();
+    expectBatchMatchesScalar<Sand>();
+    expectBatchMatchesScalar<NeoHookean>();  // no batch of its own: the fallback loop
 }
 
 TEST(NeoHookeanModel, InvertedElementIsReportedNotClamped) {
