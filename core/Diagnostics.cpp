@@ -44,7 +44,9 @@ FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, f
                             acc.p += m * v;
                             acc.L += P.x[i].cross(m * v) +
                                      m * Vec3d(B(2, 1) - B(1, 2), B(0, 2) - B(2, 0), B(1, 0) - B(0, 1));
-                            acc.ke += 0.5 * m * v.squaredNorm();
+                            // APIC's kinetic energy includes the affine part, 1/2 m D |C|^2 (B = C D): a spinning
+                            // body keeps part of its energy there, and hands it to v when it flies apart.
+                            acc.ke += 0.5 * m * (v.squaredNorm() + (B.array() * P.C[i].cast<double>().array()).sum());
                             acc.pe += P.volume0[i] * M::energyDensity(sp.params, sp.state, i);
                             acc.ge -= m * gravity.dot(P.x[i]);
                             acc.vmax = std::max(acc.vmax, v.norm());

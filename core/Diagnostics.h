@@ -15,7 +15,7 @@ struct FrameStats {
     double mass = 0.0;
     Vec3d momentum = Vec3d::Zero();
     Vec3d angularMomentum = Vec3d::Zero();  ///< about the origin, APIC affine part included
-    double kineticEnergy = 0.0;
+    double kineticEnergy = 0.0;            ///< 1/2 m (|v|^2 + D |C|^2): APIC's affine part included
     double elasticEnergy = 0.0;
     double gravityEnergy = 0.0;             ///< -sum m g . x (zero at the origin)
     double maxSpeed = 0.0;

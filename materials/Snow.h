@@ -67,8 +67,13 @@ struct Snow {
         const float Jtrial = d.sigma.prod();
         for (int a = 0; a < 3; ++a) d.sigma[a] = std::clamp(d.sigma[a], 1.0f - m.thetaC, 1.0f + m.thetaS);
         s.Fe[i] = d.U * d.sigma.asDiagonal() * d.V.transpose();
-        s.Jp[i] *= Jtrial / d.sigma.prod();
+        s.Jp[i] = std::min(s.Jp[i] * Jtrial / d.sigma.prod(), kMaxPlasticVolume);
     }
+    /// J_P's ceiling. A particle that flew off alone keeps its affine velocity C under APIC, so a C with
+    /// positive trace grows J_P exponentially, to float overflow within seconds (the spinning sphere of the
+    /// stability sweep). Past this value the hardening factor exp(xi (1 - J_P)) is below 1e-40 for any
+    /// xi of 0.1 or more, so the cap changes no stress that float can tell apart.
+    static constexpr float kMaxPlasticVolume = 1e3f;
     static double energyDensity(const Params& m, const State& s, std::size_t i) {
         const double h = hardening(m, s.Jp[i]);
         return FixedCorotated::psi<double>(m.mu * h, m.lambda * h, s.Fe[i].cast<double>());

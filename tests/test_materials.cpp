@@ -278,6 +278,19 @@ TEST(SnowModel, ClampAndHardeningFollowTheHandSequence) {
     EXPECT_GT(Snow::waveSpeed(m, s.Jp[0]), Snow::waveSpeed(m, 1.0f));
 }
 
+TEST(SnowModel, SustainedExpansionKeepsPlasticVolumeFinite) {
+    // An isolated particle keeps an expanding affine velocity: J_P would overflow; it stops at the cap,
+    // where the hardening factor is negligible, and the elastic part stays in the band.
+    Snow::Params m;
+    Snow::State s;
+    s.appendRest(1);
+    for (int n = 0; n < 5000; ++n) Snow::updateDeformation(m, s, 0, 50.0f * Mat3f::Identity(), 1e-3f);
+    EXPECT_TRUE(std::isfinite(s.Jp[0]));
+    EXPECT_EQ(s.Jp[0], Snow::kMaxPlasticVolume);
+    EXPECT_LT(Snow::hardening(m, s.Jp[0]), 1e-30f);
+    EXPECT_NEAR(s.Fe[0].determinant(), std::pow(1.0f + m.thetaS, 3.0f), 1e-4f);
+}
+
 TEST(SandModel, ReturnMappingCases) {
     Sand::Params m;
     const float alpha = Sand::alphaOf(m, 0.0f);

@@ -86,11 +86,12 @@ int accuracy(const std::string& dir, const std::string& only, bool quick, int th
     return 0;
 }
 
-int stability(const std::string& dir, bool quick, int threads) {
+int stability(const std::string& dir, const std::string& only, bool quick, int threads) {
     const std::vector<double> cfls = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.2};
     std::ostringstream csv;
     csv << "setup,material,kernel,cfl,stable,substeps,particles,min_J,max_speed,energy_growth,wall_seconds,threads,reason\n";
-    for (const std::string& setup : stabilitySetups())
+    for (const std::string& setup : stabilitySetups()) {
+        if (!only.empty() && ("," + only + ",").find("," + setup + ",") == std::string::npos) continue;
         for (const std::string& material : stabilityMaterials())
             for (Interpolation k : {Interpolation::Quadratic, Interpolation::Cubic}) {
                 if (quick && k == Interpolation::Cubic) continue;
@@ -109,6 +110,7 @@ int stability(const std::string& dir, bool quick, int threads) {
                     if (!o.stable) break;
                 }
             }
+    }
     return 0;
 }
 
@@ -128,6 +130,8 @@ int main(int argc, char** argv) {
         sub->add_option("--scenes", scenes, "the scenes/validation directory (default: the source tree's)");
     }
     app.get_subcommand("accuracy")->add_option("--cases", only, "comma-separated case names (default all)");
+    std::string setups;
+    app.get_subcommand("stability")->add_option("--setups", setups, "comma-separated setup names (default all)");
     CLI11_PARSE(app, argc, argv);
     const int n = threads > 0 ? threads : int(std::thread::hardware_concurrency());
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(n));
@@ -136,7 +140,7 @@ int main(int argc, char** argv) {
         std::filesystem::create_directories(out);
         writeMachine(out, n);
         if (app.got_subcommand("accuracy")) return accuracy(out, only, quick, n);
-        return stability(out, quick, n);
+        return stability(out, setups, quick, n);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "mpm_report: error: %s\n", e.what());
         return 1;
