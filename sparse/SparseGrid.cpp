@@ -8,8 +8,10 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_scan.h>
 
 #include <algorithm>
+#include <functional>
 #include <limits>
 
 namespace mpm {
@@ -17,6 +19,8 @@ namespace mpm {
 namespace {
 /// Particles per task when scanning positions; large enough to amortise a tree accessor.
 constexpr std::size_t kScanGrain = 4096;
+/// Leaves per task in the per-leaf loops (a few tree lookups or chunk sums each).
+constexpr std::size_t kLeafGrain = 256;
 /// Upper bound on counting-sort chunks: the histogram is chunks x leaves integers.
 constexpr std::size_t kMaxSortChunks = 64;
 constexpr std::size_t kMinSortChunkSize = 2048;
@@ -144,17 +148,24 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
     particleLeaves_.clear();
     for (auto& c : colors_) c.clear();
     neighbours_.resize(L);
-    {
-        openvdb::tree::ValueAccessor<const LeafIndexTree> idx(t.leafIndex);
-        for (uint32_t l = 0; l < L; ++l) {
-            if (!hasParticles_[l]) continue;
-            particleLeaves_.push_back(l);
-            const Vec3i c = leaves_[l].origin / kLeafDim;
-            colors_[((c[0] & 1) << 2) | ((c[1] & 1) << 1) | (c[2] & 1)].push_back(l);
-            for (int d = 0; d < 8; ++d)
-                neighbours_[l][d] = uint32_t(idx.getValue(openvdb::Coord(c[0] + (d >> 2), c[1] + ((d >> 1) & 1), c[2] + (d & 1))));
-        }
+    for (uint32_t l = 0; l < L; ++l) {
+        if (!hasParticles_[l]) continue;
+        particleLeaves_.push_back(l);
+        const Vec3i c = leaves_[l].origin / kLeafDim;
+        colors_[((c[0] & 1) << 2) | ((c[1] & 1) << 1) | (c[2] & 1)].push_back(l);
     }
+    // The tree lookups, the costly part, in parallel (read-only accessors, one per task).
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particleLeaves_.size(), kLeafGrain),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          openvdb::tree::ValueAccessor<const LeafIndexTree> idx(t.leafIndex);
+                          for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                              const uint32_t l = particleLeaves_[i];
+                              const Vec3i c = leaves_[l].origin / kLeafDim;
+                              for (int d = 0; d < 8; ++d)
+                                  neighbours_[l][d] =
+                                      uint32_t(idx.getValue(openvdb::Coord(c[0] + (d >> 2), c[1] + ((d >> 1) & 1), c[2] + (d & 1))));
+                          }
+                      });
 
 }
 
@@ -189,17 +200,37 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
             }
         });
         // Exclusive prefix over (leaf, chunk): chunk c of leaf l starts after all earlier chunks of l.
+        // In parallel, since it grows with the leaf count: per-leaf totals, a scan over leaves, then each
+        // leaf's chunks from its start.
         std::vector<uint32_t>& start = *r.leafStart;
-        uint32_t running = 0;
-        for (std::size_t l = 0; l < L; ++l) {
-            start[l] = running;
-            for (std::size_t c = 0; c < chunks; ++c) {
-                const uint32_t n = histogram_[c * L + l];
-                histogram_[c * L + l] = running;
-                running += n;
+        leafCount_.resize(L);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L, kLeafGrain), [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t l = range.begin(); l < range.end(); ++l) {
+                uint32_t n = 0;
+                for (std::size_t c = 0; c < chunks; ++c) n += histogram_[c * L + l];
+                leafCount_[l] = n;
             }
-        }
-        start[L] = running;
+        });
+        start[L] = tbb::parallel_scan(
+            tbb::blocked_range<std::size_t>(0, L, kLeafGrain), uint32_t(0),
+            [&](const tbb::blocked_range<std::size_t>& range, uint32_t sum, bool final) {
+                for (std::size_t l = range.begin(); l < range.end(); ++l) {
+                    if (final) start[l] = sum;
+                    sum += leafCount_[l];
+                }
+                return sum;
+            },
+            std::plus<uint32_t>());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L, kLeafGrain), [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t l = range.begin(); l < range.end(); ++l) {
+                uint32_t running = start[l];
+                for (std::size_t c = 0; c < chunks; ++c) {
+                    const uint32_t n = histogram_[c * L + l];
+                    histogram_[c * L + l] = running;
+                    running += n;
+                }
+            }
+        });
         tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
             uint32_t* next = histogram_.data() + c * L;
             const std::size_t end = std::min(N, (c + 1) * chunkSize);
@@ -213,7 +244,8 @@ std::size_t SparseGrid::memoryBytes() const {
     return std::size_t(t.mass.memUsage() + t.momentum.memUsage() + t.leafIndex.memUsage() + t.particleLeaves.memUsage() +
                        t.gridLeaves.memUsage()) +
            leaves_.capacity() * sizeof(LeafView) + neighbours_.capacity() * sizeof(std::array<uint32_t, 8>) +
-           histogram_.capacity() * sizeof(uint32_t) + leafIdScratch_.capacity() * sizeof(uint32_t);
+           histogram_.capacity() * sizeof(uint32_t) + leafIdScratch_.capacity() * sizeof(uint32_t) +
+           leafCount_.capacity() * sizeof(uint32_t);
 }
 
 std::size_t SparseGrid::allocatedLeaves() const { return std::size_t(trees_->mass.leafCount()); }

@@ -99,6 +99,7 @@ private:
     std::vector<std::array<uint32_t, 8>> neighbours_;
     std::vector<uint32_t> leafIdScratch_;
     std::vector<uint32_t> histogram_;
+    std::vector<uint32_t> leafCount_;  ///< particles per leaf, for the parallel prefix sum
     std::vector<uint8_t> hasParticles_;
 };
 

@@ -1,6 +1,7 @@
 #include "sparse/Transfer.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,6 +10,9 @@
 namespace mpm {
 
 namespace {
+
+/// Leaves per G2P task: a leaf holds hundreds of particles, so one is enough work to balance.
+constexpr std::size_t kG2PLeafGrain = 1;
 
 /// Four floats in one SSE register (GCC/Clang vector extension): a node's (mass, momentum) in P2G and its
 /// (velocity, 0) in G2P, so that each node costs one vector operation instead of four scalar ones.
@@ -257,29 +261,31 @@ void particlesToGrid(SparseGrid& grid, std::vector<AnySpecies>& species, const T
 
 G2PSummary gridToParticles(const SparseGrid& grid, std::vector<AnySpecies>& species, const TransferSettings& s, float dt) {
     const std::vector<uint32_t>& leaves = grid.particleLeaves();
-    const std::size_t S = species.size();
-    std::vector<float> maxSpeed(leaves.size(), 0.0f);
-    std::vector<float> minKey(leaves.size() * S, std::numeric_limits<float>::infinity());
-    std::vector<G2PSummary> bad(leaves.size());
+    G2PSummary none;
+    none.minStiffnessKey.assign(species.size(), std::numeric_limits<float>::infinity());
     const bool apic = s.transfer == TransferScheme::APIC;
-    withScheme(s, [&]<class K, bool MLS>() {
-        tbb::parallel_for(std::size_t(0), leaves.size(), [&](std::size_t i) {
-            gatherLeaf<K, MLS>(grid, species, leaves[i], dt, apic, maxSpeed[i], minKey.data() + i * S, bad[i]);
-        });
+    // A deterministic reduction (fixed split, joins in leaf order): the first bad particle reported is the
+    // first in leaf order whatever the thread count, and no serial pass over the leaves is left.
+    return withScheme(s, [&]<class K, bool MLS>() {
+        return tbb::parallel_deterministic_reduce(
+            tbb::blocked_range<std::size_t>(0, leaves.size(), kG2PLeafGrain), none,
+            [&](const tbb::blocked_range<std::size_t>& r, G2PSummary acc) {
+                for (std::size_t i = r.begin(); i < r.end(); ++i)
+                    gatherLeaf<K, MLS>(grid, species, leaves[i], dt, apic, acc.maxSpeed, acc.minStiffnessKey.data(), acc);
+                return acc;
+            },
+            [](G2PSummary a, const G2PSummary& b) {
+                a.maxSpeed = std::max(a.maxSpeed, b.maxSpeed);
+                for (std::size_t sp = 0; sp < a.minStiffnessKey.size(); ++sp)
+                    a.minStiffnessKey[sp] = std::min(a.minStiffnessKey[sp], b.minStiffnessKey[sp]);
+                if (a.badParticle < 0 && b.badParticle >= 0) {
+                    a.badSpecies = b.badSpecies;
+                    a.badParticle = b.badParticle;
+                    a.badField = b.badField;
+                }
+                return a;
+            });
     });
-    // Reduce in leaf order, so that the first bad particle reported does not depend on scheduling.
-    G2PSummary out;
-    out.minStiffnessKey.assign(S, std::numeric_limits<float>::infinity());
-    for (std::size_t i = 0; i < leaves.size(); ++i) {
-        out.maxSpeed = std::max(out.maxSpeed, maxSpeed[i]);
-        for (std::size_t sp = 0; sp < S; ++sp) out.minStiffnessKey[sp] = std::min(out.minStiffnessKey[sp], minKey[i * S + sp]);
-        if (out.badParticle < 0 && bad[i].badParticle >= 0) {
-            out.badSpecies = bad[i].badSpecies;
-            out.badParticle = bad[i].badParticle;
-            out.badField = bad[i].badField;
-        }
-    }
-    return out;
 }
 
 }  // namespace mpm
