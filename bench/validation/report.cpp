@@ -95,9 +95,13 @@ int stability(const std::string& dir, const std::string& only, bool quick, int t
         for (const std::string& material : stabilityMaterials())
             for (Interpolation k : {Interpolation::Quadratic, Interpolation::Cubic}) {
                 if (quick && k == Interpolation::Cubic) continue;
-                // Ascending CFL until the first unstable run: the largest stable number is the one before.
-                for (double cfl : cfls) {
-                    if (quick && cfl != 0.5 && cfl != 1.2) continue;
+                // Descending from the largest C: the first stable value is the largest stable one (stability
+                // is taken as monotone in C; cheap where everything is stable, the common case). The default C
+                // is run too, so that its verdict is measured rather than inferred.
+                const double defaultCfl = SimulationSettings().cfl;
+                bool ranDefault = false;
+                double largestStable = 0.0;
+                auto runOne = [&](double cfl) {
                     StabilityRun run{setup, material, k, cfl, quick ? 400 : 2000};
                     const StabilityOutcome o = runStability(run);
                     const char* kname = k == Interpolation::Cubic ? "cubic" : "quadratic";
@@ -107,8 +111,17 @@ int stability(const std::string& dir, const std::string& only, bool quick, int t
                         << "," << o.particles << "," << o.minJ << "," << o.maxSpeed << "," << o.energyGrowth << "," << o.wallSeconds
                         << "," << threads << "," << csvQuote(o.reason) << "\n";
                     writeTextAtomically(dir + "/stability.csv", csv.str());
-                    if (!o.stable) break;
+                    ranDefault |= cfl == defaultCfl;
+                    return o.stable;
+                };
+                for (auto it = cfls.rbegin(); it != cfls.rend(); ++it) {
+                    if (quick && *it != defaultCfl && *it != cfls.back()) continue;
+                    if (runOne(*it)) {
+                        largestStable = *it;
+                        break;
+                    }
                 }
+                if (!ranDefault && largestStable > defaultCfl) runOne(defaultCfl);
             }
     }
     return 0;
