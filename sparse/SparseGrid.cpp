@@ -166,7 +166,6 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
                                       uint32_t(idx.getValue(openvdb::Coord(c[0] + (d >> 2), c[1] + ((d >> 1) & 1), c[2] + (d & 1))));
                           }
                       });
-
 }
 
 void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
