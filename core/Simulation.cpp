@@ -98,8 +98,12 @@ double Simulation::cflTimeStep() const {
                             },
                             species_[s]));
     }
-    const double speed = double(c) + double(maxSpeed_);
-    return speed > 0.0 ? settings_.cfl * settings_.dx / speed : std::numeric_limits<double>::infinity();
+    // dt (c + |v| + |g| dt) = C dx: the speed bound is the one at the end of the step, so that gravity
+    // cannot carry a very soft or resting body more than C dx in one step (c + |v| near 0 would allow any
+    // dt). Solved without cancellation; it is C dx / (c + |v|) when g = 0.
+    const double speed = double(c) + double(maxSpeed_), g = settings_.gravity.norm(), reach = settings_.cfl * settings_.dx;
+    const double denominator = speed + std::sqrt(speed * speed + 4.0 * g * reach);
+    return denominator > 0.0 ? 2.0 * reach / denominator : std::numeric_limits<double>::infinity();
 }
 
 void Simulation::refreshSpeedBound() {

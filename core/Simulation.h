@@ -102,7 +102,8 @@ public:
     /// One substep no longer than dtMax (and the CFL bound); returns the step taken.
     double substep(double dtMax);
 
-    /// dt <= C dx / (c + |v|max): c from the stiffest species, |v|max from the last G2P.
+    /// dt (c + |v|max + |g| dt) <= C dx, i.e. C dx / (c + |v|max) without gravity: c from the stiffest
+    /// species, |v|max from the last G2P, |g| dt the speed gravity adds during the step.
     double cflTimeStep() const;
     /// Call after writing particle velocities directly, so that the next CFL step sees them.
     void refreshSpeedBound();

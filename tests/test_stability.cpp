@@ -88,3 +88,26 @@ TEST(Stability, RetryHalvesTheStepUntilTheFrameSucceeds) {
     // fall from the block's full height (0.3 m) would make it.
     EXPECT_LT(sim.measure().maxSpeed, std::sqrt(2.0 * 9.81 * 0.3));
 }
+
+TEST(Stability, CflStepBoundsTheDistanceGravityAddsToAVerySoftBody) {
+    // Water so soft that its wave speed is near zero: without the |g| dt term the CFL step would be the
+    // whole frame and the block would fall through several cells in its first substep.
+    SimulationSettings s;
+    s.dx = 0.02;
+    s.cfl = 0.8;
+    s.fps = 5.0;  // a 0.2 s frame: one substep of it would fall 19 cells
+    s.substepsPerFrame = 1;
+    Simulation sim(s);
+    Water::Params w;
+    w.bulkModulus = 1e-2f;
+    addWaterBlock(sim, Vec3d(0, 0.1, 0), Vec3d(0.1, 0.2, 0.1), Vec3f::Zero(), w);
+    const double dt = sim.cflTimeStep();
+    const double c = Water::waveSpeed(w, 1.0f), g = s.gravity.norm();
+    EXPECT_NEAR(dt * (c + g * dt), s.cfl * s.dx, 1e-9);  // the quadratic's root
+    EXPECT_NO_THROW(sim.advanceFrame());                  // and no particle crosses a cell in a substep
+    SimulationSettings still = s;
+    still.gravity.setZero();
+    Simulation noGravity(still);
+    addWaterBlock(noGravity, Vec3d(0, 0.1, 0), Vec3d(0.1, 0.2, 0.1), Vec3f::Zero(), w);
+    EXPECT_NEAR(noGravity.cflTimeStep(), still.cfl * still.dx / c, 1e-12 * still.cfl * still.dx / c);
+}
