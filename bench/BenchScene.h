@@ -4,6 +4,7 @@
 // cube spread over many cells. Shared by the scene-level driver and the Google Benchmark kernels.
 #include <cmath>
 #include <memory>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -23,7 +24,11 @@ struct BenchScene {
     long particles = 1000000;
     int blobs = 1;                         ///< 1 block, or 8 blobs at the corners of a cube
     double spreadCells = 0.0;              ///< edge of that cube in cells (blobs only)
+    bool spray = false;                    ///< particles scattered at random, most alone in their leaf
 };
+
+/// Cube edge for spray, in cells: about four leaves' volume per particle, so most particles are alone.
+inline double sprayEdgeCells(long particles) { return std::cbrt(double(particles) * 4.0 * kLeafNodes); }
 
 template <class M>
 AnySpecies named(const char* name) {
@@ -65,7 +70,11 @@ inline std::unique_ptr<Simulation> makeBenchSimulation(const BenchScene& b) {
     const int perBlob = int(std::cbrt(double(b.particles) / b.blobs) + 0.5);
     std::vector<Vec3d> x;
     x.reserve(std::size_t(b.blobs) * perBlob * perBlob * perBlob);
-    if (b.blobs == 1) {
+    if (b.spray) {
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<double> u(0.0, sprayEdgeCells(b.particles) * kDx);
+        for (long i = 0; i < b.particles; ++i) x.emplace_back(u(rng), kDx + u(rng), u(rng));
+    } else if (b.blobs == 1) {
         appendCube(x, Vec3d(0, kDx, 0), perBlob, h);
     } else {
         for (int c = 0; c < 8; ++c) {

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <map>
 #include <random>
+#include <tuple>
 
 #include "BenchScene.h"
 
@@ -15,6 +16,9 @@ using namespace mpm;
 using namespace mpm::bench;
 
 namespace {
+
+/// Spray: particles scattered so that most are alone in their leaf (BenchScene::spray).
+constexpr long kSprayParticles = 20000;
 
 long kernelParticles() {
     const char* env = std::getenv("MPM_BENCH_PARTICLES");
@@ -31,11 +35,12 @@ struct KernelScene {
     TransferSettings transfer;
     float dt = float(kTargetDt);
 
-    explicit KernelScene(const std::string& material, Interpolation kernel = Interpolation::Quadratic) {
+    explicit KernelScene(const std::string& material, Interpolation kernel = Interpolation::Quadratic, bool spray = false) {
         BenchScene b;
         b.material = material;
         b.kernel = kernel;
-        b.particles = kernelParticles();
+        b.particles = spray ? kSprayParticles : kernelParticles();
+        b.spray = spray;
         auto sim = makeBenchSimulation(b);
         sim->substep(kTargetDt);  // sorts the particles by leaf: later binning finds them in order
         species = sim->species();
@@ -56,10 +61,10 @@ struct KernelScene {
     }
 };
 
-KernelScene& scene(const std::string& material, Interpolation kernel = Interpolation::Quadratic) {
-    static std::map<std::pair<std::string, int>, std::unique_ptr<KernelScene>> cache;
-    auto& s = cache[{material, int(kernel)}];
-    if (!s) s = std::make_unique<KernelScene>(material, kernel);
+KernelScene& scene(const std::string& material, Interpolation kernel = Interpolation::Quadratic, bool spray = false) {
+    static std::map<std::tuple<std::string, int, bool>, std::unique_ptr<KernelScene>> cache;
+    auto& s = cache[{material, int(kernel), spray}];
+    if (!s) s = std::make_unique<KernelScene>(material, kernel, spray);
     return *s;
 }
 
@@ -100,6 +105,19 @@ void BM_G2P(benchmark::State& st, const char* material, Interpolation kernel) {
     for (auto _ : st) benchmark::DoNotOptimize(gridToParticles(s.grid, s.species, s.transfer, 1e-3f * s.dt));
     perParticle(st, s.particles());
 }
+/// A whole substep's transfers on spray, where the per-leaf costs (zeroing, the local blocks, the grid
+/// update over the 8 leaves a lone particle touches) dominate the per-particle ones.
+void BM_SprayTransfers(benchmark::State& st) {
+    KernelScene& s = scene("water", Interpolation::Quadratic, true);
+    for (auto _ : st) {
+        particlesToGrid(s.grid, s.species, s.transfer, s.dt);
+        updateGridVelocities(s.grid, s.colliders, Vec3f(0, -9.81f, 0), s.dt, 0.0);
+        benchmark::DoNotOptimize(gridToParticles(s.grid, s.species, s.transfer, 1e-3f * s.dt));
+    }
+    perParticle(st, s.particles());
+}
+BENCHMARK(BM_SprayTransfers)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 #define MPM_TRANSFER_BENCH(material, kernel)                                                             \
     BENCHMARK_CAPTURE(BM_P2G, material##_##kernel, #material, Interpolation::kernel)                    \
         ->Unit(benchmark::kMillisecond)->UseRealTime();                                                  \

@@ -6,10 +6,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 namespace mpm {
 
 namespace {
+
+/// Up to this many particles in a leaf, the transfers find the part of the local block they reach.
+constexpr std::size_t kFewParticles = 32;
 
 /// Leaves per G2P task: a leaf holds hundreds of particles, so one is enough work to balance.
 constexpr std::size_t kG2PLeafGrain = 1;
@@ -27,13 +31,50 @@ struct LocalBlock {
     static constexpr int N = kLeafDim + K::kWidth - 1;
     static constexpr int kNodes = N * N * N;
     static int index(int a, int b, int c) { return (a * N + b) * N + c; }
-    /// Visits every block node with the leaf among the 8 neighbours that holds it and the offset in that leaf.
+    /// Block nodes [lo, hi) per axis.
+    struct Range {
+        int lo[3], hi[3];
+    };
+    /// The part of the block that the particles of leaf l reach. A leaf with few particles (spray) needs a
+    /// small part of its block; zeroing, adding and gathering only that part makes a lone particle cost its
+    /// stencil rather than the N^3 block. Crowded leaves skip the scan and take the whole block.
+    static Range reach(const std::vector<AnySpecies>& species, uint32_t l, const Vec3i& origin, double dx) {
+        std::size_t count = 0;
+        for (const AnySpecies& s : species) std::visit([&](const auto& sp) { count += sp.leafStart[l + 1] - sp.leafStart[l]; }, s);
+        if (count > kFewParticles) return Range{{0, 0, 0}, {N, N, N}};
+        Range r{{N, N, N}, {0, 0, 0}};
+        const double invDx = 1.0 / dx;
+        for (const AnySpecies& s : species)
+            std::visit(
+                [&](const auto& sp) {
+                    for (uint32_t p = sp.leafStart[l]; p < sp.leafStart[l + 1]; ++p)
+                        for (int a = 0; a < 3; ++a) {
+                            const int base = floorToInt(sp.p.x[p][a] * invDx - K::kBaseShift) - origin[a];
+                            r.lo[a] = std::min(r.lo[a], base);
+                            r.hi[a] = std::max(r.hi[a], base + K::kWidth);
+                        }
+                },
+                s);
+        return r;
+    }
+    static bool whole(const Range& r) {
+        return r.lo[0] == 0 && r.lo[1] == 0 && r.lo[2] == 0 && r.hi[0] == N && r.hi[1] == N && r.hi[2] == N;
+    }
+    /// Visits the block nodes in r with the leaf among the 8 neighbours that holds each and its offset there.
     template <class F>
-    static void forEachNode(const SparseGrid& grid, uint32_t l, F&& f) {
+    static void forEachNode(const SparseGrid& grid, uint32_t l, const Range& r, F&& f) {
+        // The whole block with constant bounds, which the compiler unrolls; a part of it with the range's.
+        if (whole(r)) visit(grid, l, Range{{0, 0, 0}, {N, N, N}}, f, std::true_type{});
+        else visit(grid, l, r, f, std::false_type{});
+    }
+    template <class F, bool Whole>
+    static void visit(const SparseGrid& grid, uint32_t l, const Range& r, F& f, std::bool_constant<Whole>) {
         const auto& nb = grid.neighbours(l);
-        for (int a = 0; a < N; ++a)
-            for (int b = 0; b < N; ++b)
-                for (int c = 0; c < N; ++c) {
+        const int lo0 = Whole ? 0 : r.lo[0], lo1 = Whole ? 0 : r.lo[1], lo2 = Whole ? 0 : r.lo[2];
+        const int hi0 = Whole ? N : r.hi[0], hi1 = Whole ? N : r.hi[1], hi2 = Whole ? N : r.hi[2];
+        for (int a = lo0; a < hi0; ++a)
+            for (int b = lo1; b < hi1; ++b)
+                for (int c = lo2; c < hi2; ++c) {
                     const LeafView& leaf = grid.leaf(nb[((a >> kLeafLog2) << 2) | ((b >> kLeafLog2) << 1) | (c >> kLeafLog2)]);
                     f(index(a, b, c), leaf, leafOffset(a & (kLeafDim - 1), b & (kLeafDim - 1), c & (kLeafDim - 1)));
                 }
@@ -120,13 +161,17 @@ template <class K, bool MLS>
 void scatterLeaf(const SparseGrid& grid, std::vector<AnySpecies>& species, uint32_t l, float dt) {
     using B = LocalBlock<K>;
     f4 block[B::kNodes];
-    std::memset(block, 0, sizeof(block));
     const Vec3i origin = grid.leaf(l).origin;
+    const typename B::Range r = B::reach(species, l, origin, grid.dx());
+    if (B::whole(r)) std::memset(block, 0, sizeof(block));
+    else
+        for (int a = r.lo[0]; a < r.hi[0]; ++a)
+            for (int b = r.lo[1]; b < r.hi[1]; ++b) std::memset(block + B::index(a, b, r.lo[2]), 0, sizeof(f4) * (r.hi[2] - r.lo[2]));
     for (AnySpecies& s : species)
         std::visit([&](auto& sp) { scatterSpecies<K, MLS>(sp, sp.leafStart[l], sp.leafStart[l + 1], origin, grid.dx(), dt, block); },
                    s);
     // Add the local block into the leaf and its 7 neighbours; the colouring keeps this race free.
-    B::forEachNode(grid, l, [&](int n, const LeafView& leaf, int off) {
+    B::forEachNode(grid, l, r, [&](int n, const LeafView& leaf, int off) {
         const f4 b = block[n];
         if (b[0] == 0.0f) return;
         leaf.mass[off] += b[0];
@@ -222,11 +267,11 @@ void gatherLeaf(const SparseGrid& grid, std::vector<AnySpecies>& species, uint32
                 float& maxSpeed, float* minKey, G2PSummary& bad) {
     using B = LocalBlock<K>;
     f4 vel[B::kNodes];
-    B::forEachNode(grid, l, [&](int n, const LeafView& leaf, int off) {
+    const Vec3i origin = grid.leaf(l).origin;
+    B::forEachNode(grid, l, B::reach(species, l, origin, grid.dx()), [&](int n, const LeafView& leaf, int off) {
         const float* src = leaf.momentum + 3 * off;
         vel[n] = f4{src[0], src[1], src[2], 0.0f};
     });
-    const Vec3i origin = grid.leaf(l).origin;
     for (std::size_t s = 0; s < species.size(); ++s)
         std::visit(
             [&](auto& sp) {
