@@ -95,16 +95,10 @@ struct Sand {
 
     /// Elastic predictor F_E trial = (I + dt grad v) F_E, then the return map.
     static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
-        const Mat3f trial = (Mat3f::Identity() + dt * gradV) * s.Fe[i];
-        returnMap(m, s, i, svd3<float>(trial));
+        predictAndReturnMap<Sand>(m, s, i, gradV, dt);
     }
     static void updateDeformationBatch(const Params& m, State& s, std::size_t first, int n, const Mat3f* gradV, float dt) {
-        Mat3f trial[simd::kLanes];
-        for (int k = n; k < simd::kLanes; ++k) trial[k].setIdentity();  // unread, but GCC cannot see that
-        for (int k = 0; k < n; ++k) trial[k] = (Mat3f::Identity() + dt * gradV[k]) * s.Fe[first + k];
-        Svd3<float> d[simd::kLanes];
-        svd3Batch(trial, n, d);
-        for (int k = 0; k < n; ++k) returnMap(m, s, first + k, d[k]);
+        predictAndReturnMapBatch<Sand>(m, s, first, n, gradV, dt);
     }
     /// Project eps = ln Sigma of the trial F_E = U Sigma V^T (plus the volume correction) and harden.
     static void returnMap(const Params& m, State& s, std::size_t i, const Svd3<float>& d) {

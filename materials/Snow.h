@@ -51,16 +51,10 @@ struct Snow {
 
     /// Elastic predictor F_E trial = (I + dt grad v) F_E, then the return map.
     static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
-        const Mat3f trial = (Mat3f::Identity() + dt * gradV) * s.Fe[i];
-        returnMap(m, s, i, svd3<float>(trial));
+        predictAndReturnMap<Snow>(m, s, i, gradV, dt);
     }
     static void updateDeformationBatch(const Params& m, State& s, std::size_t first, int n, const Mat3f* gradV, float dt) {
-        Mat3f trial[simd::kLanes];
-        for (int k = n; k < simd::kLanes; ++k) trial[k].setIdentity();  // unread, but GCC cannot see that
-        for (int k = 0; k < n; ++k) trial[k] = (Mat3f::Identity() + dt * gradV[k]) * s.Fe[first + k];
-        Svd3<float> d[simd::kLanes];
-        svd3Batch(trial, n, d);
-        for (int k = 0; k < n; ++k) returnMap(m, s, first + k, d[k]);
+        predictAndReturnMapBatch<Snow>(m, s, first, n, gradV, dt);
     }
     /// Clamp sigma of the trial F_E = U Sigma V^T, and push the clamped-away volume into J_P.
     static void returnMap(const Params& m, State& s, std::size_t i, Svd3<float> d) {
