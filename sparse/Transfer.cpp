@@ -136,20 +136,25 @@ void scatterSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, d
             sy = lanes123(S(0, 1), S(1, 1), S(2, 1));
             sz = lanes123(S(0, 2), S(1, 2), S(2, 2));
         }
+        // Node (i, j, k) gets w_k Q_ij + w_k d_k A_ij + dw_k Sz_ij, where Q_ij = w_ij (q + d_i ax + d_j ay)
+        // + the x, y stress terms, A_ij = w_ij az and Sz_ij = w_ij sz: three FMAs per node, the rest per row.
+        float wd2[W];
+        for (int k = 0; k < W; ++k) wd2[k] = st.w[2][k] * st.d[2][k];
         for (int i = 0; i < W; ++i) {
             const f4 qi = q + st.d[0][i] * ax;
             for (int j = 0; j < W; ++j) {
-                const f4 qij = qi + st.d[1][j] * ay;
                 const float wij = st.w[0][i] * st.w[1][j];
-                f4 sij{}, szij{};
+                f4 Qij = wij * (qi + st.d[1][j] * ay);
+                const f4 Aij = wij * az;
+                f4 Szij{};
                 if constexpr (!MLS) {
-                    sij = (st.dw[0][i] * st.w[1][j]) * sx + (st.w[0][i] * st.dw[1][j]) * sy;
-                    szij = wij * sz;
+                    Qij += (st.dw[0][i] * st.w[1][j]) * sx + (st.w[0][i] * st.dw[1][j]) * sy;
+                    Szij = wij * sz;
                 }
                 f4* row = block + st.node(i, j, 0);
                 for (int k = 0; k < W; ++k) {
-                    f4 c = (wij * st.w[2][k]) * (qij + st.d[2][k] * az);
-                    if constexpr (!MLS) c += st.w[2][k] * sij + st.dw[2][k] * szij;
+                    f4 c = st.w[2][k] * Qij + wd2[k] * Aij;
+                    if constexpr (!MLS) c += st.dw[2][k] * Szij;
                     row[k] += c;
                 }
             }
