@@ -144,26 +144,29 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
     }
     const std::size_t L = leaves_.size();
 
-    // 4. Particle leaves, their colours and their 8 neighbours (looked up once per leaf, not per particle).
+    // 4. Particle leaves, their 8 neighbours (looked up once per leaf, not per particle) and the inverse.
     particleLeaves_.clear();
-    for (auto& c : colors_) c.clear();
+    for (uint32_t l = 0; l < L; ++l)
+        if (hasParticles_[l]) particleLeaves_.push_back(l);
     neighbours_.resize(L);
-    for (uint32_t l = 0; l < L; ++l) {
-        if (!hasParticles_[l]) continue;
-        particleLeaves_.push_back(l);
-        const Vec3i c = leaves_[l].origin / kLeafDim;
-        colors_[((c[0] & 1) << 2) | ((c[1] & 1) << 1) | (c[2] & 1)].push_back(l);
-    }
-    // The tree lookups, the costly part, in parallel (read-only accessors, one per task).
+    sources_.resize(L);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L, kLeafGrain), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t l = range.begin(); l < range.end(); ++l) sources_[l].fill(kNoLeaf);
+    });
+    // The tree lookups, the costly part, in parallel (read-only accessors, one per task). Each (leaf, d)
+    // of the inverse has one source, so the tasks write disjoint entries.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particleLeaves_.size(), kLeafGrain),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                           openvdb::tree::ValueAccessor<const LeafIndexTree> idx(t.leafIndex);
                           for (std::size_t i = range.begin(); i < range.end(); ++i) {
                               const uint32_t l = particleLeaves_[i];
                               const Vec3i c = leaves_[l].origin / kLeafDim;
-                              for (int d = 0; d < 8; ++d)
-                                  neighbours_[l][d] =
-                                      uint32_t(idx.getValue(openvdb::Coord(c[0] + (d >> 2), c[1] + ((d >> 1) & 1), c[2] + (d & 1))));
+                              for (int d = 0; d < 8; ++d) {
+                                  const uint32_t n = uint32_t(
+                                      idx.getValue(openvdb::Coord(c[0] + (d >> 2), c[1] + ((d >> 1) & 1), c[2] + (d & 1))));
+                                  neighbours_[l][d] = n;
+                                  sources_[n][d] = uint32_t(i);
+                              }
                           }
                       });
 }
@@ -178,10 +181,11 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
         r.destination->resize(N);
         r.leafStart->assign(L + 1, 0);
         if (N == 0) continue;
-        leafIdScratch_.resize(N);
         const std::size_t chunks = std::clamp<std::size_t>(N / kMinSortChunkSize, 1, kMaxSortChunks);
         const std::size_t chunkSize = (N + chunks - 1) / chunks;
         histogram_.assign(chunks * L, 0);
+        // The destination array first holds each particle's leaf, then (in place) its sorted slot.
+        std::vector<uint32_t>& dest = *r.destination;
         tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
             openvdb::tree::ValueAccessor<const LeafIndexTree> idx(t.leafIndex);
             uint32_t* hist = histogram_.data() + c * L;
@@ -194,7 +198,7 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
                     l = uint32_t(idx.getValue(leafCoord));
                     last = leafCoord;
                 }
-                leafIdScratch_[i] = l;
+                dest[i] = l;
                 ++hist[l];
             }
         });
@@ -233,7 +237,7 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
         tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
             uint32_t* next = histogram_.data() + c * L;
             const std::size_t end = std::min(N, (c + 1) * chunkSize);
-            for (std::size_t i = c * chunkSize; i < end; ++i) (*r.destination)[i] = next[leafIdScratch_[i]]++;
+            for (std::size_t i = c * chunkSize; i < end; ++i) dest[i] = next[dest[i]]++;
         });
     }
 }
@@ -243,7 +247,8 @@ std::size_t SparseGrid::memoryBytes() const {
     return std::size_t(t.mass.memUsage() + t.momentum.memUsage() + t.leafIndex.memUsage() + t.particleLeaves.memUsage() +
                        t.gridLeaves.memUsage()) +
            leaves_.capacity() * sizeof(LeafView) + neighbours_.capacity() * sizeof(std::array<uint32_t, 8>) +
-           histogram_.capacity() * sizeof(uint32_t) + leafIdScratch_.capacity() * sizeof(uint32_t) +
+           sources_.capacity() * sizeof(std::array<uint32_t, 8>) + transferScratch_.capacity() * sizeof(float) +
+           histogram_.capacity() * sizeof(uint32_t) +
            leafCount_.capacity() * sizeof(uint32_t);
 }
 

@@ -62,20 +62,23 @@ public:
         updateTopology(requests);
         sortParticles(requests);
     }
-    /// The first half of rebuild: the leaf set, its colours and neighbour tables ("topology update").
+    /// The first half of rebuild: the leaf set and its neighbour tables ("topology update").
     void updateTopology(const std::vector<BinRequest>& requests);
     /// The second half: the counting sort of each species by leaf ("binning"); needs updateTopology first.
     void sortParticles(std::vector<BinRequest>& requests);
 
     std::size_t leafCount() const { return leaves_.size(); }
     const LeafView& leaf(std::size_t i) const { return leaves_[i]; }
-    /// Leaves holding particles, grouped in 8 colours by the parity of their leaf coordinate, so that two
-    /// leaves of one colour never write the same node during P2G.
-    const std::array<std::vector<uint32_t>, 8>& coloredParticleLeaves() const { return colors_; }
     /// All leaves holding particles, in leaf order.
     const std::vector<uint32_t>& particleLeaves() const { return particleLeaves_; }
     /// The 8 leaves at leaf coordinate + {0,1}^3 of a particle leaf, index (dx*4 + dy*2 + dz).
     const std::array<uint32_t, 8>& neighbours(std::size_t leafIndex) const { return neighbours_[leafIndex]; }
+    /// The inverse: for any leaf, entry d is the position in particleLeaves() of the particle leaf whose
+    /// neighbours()[d] it is (the one at leaf coordinate - offset d), or kNoLeaf.
+    static constexpr uint32_t kNoLeaf = ~0u;
+    const std::array<uint32_t, 8>& sources(std::size_t leafIndex) const { return sources_[leafIndex]; }
+    /// Workspace of the transfers, kept between substeps so that it is allocated once.
+    std::vector<float>& transferScratch() { return transferScratch_; }
 
     /// Bytes held by the grid trees and the leaf tables.
     std::size_t memoryBytes() const;
@@ -95,9 +98,9 @@ private:
     int stencilWidth_ = 3;
     std::vector<LeafView> leaves_;
     std::vector<uint32_t> particleLeaves_;
-    std::array<std::vector<uint32_t>, 8> colors_;
     std::vector<std::array<uint32_t, 8>> neighbours_;
-    std::vector<uint32_t> leafIdScratch_;
+    std::vector<std::array<uint32_t, 8>> sources_;
+    std::vector<float> transferScratch_;
     std::vector<uint32_t> histogram_;
     std::vector<uint32_t> leafCount_;  ///< particles per leaf, for the parallel prefix sum
     std::vector<uint8_t> hasParticles_;

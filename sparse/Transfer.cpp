@@ -2,10 +2,12 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_scan.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <type_traits>
 
 namespace mpm {
@@ -17,6 +19,9 @@ constexpr std::size_t kFewParticles = 32;
 
 /// Leaves per G2P task: a leaf holds hundreds of particles, so one is enough work to balance.
 constexpr std::size_t kG2PLeafGrain = 1;
+/// Leaves per task in the per-leaf bookkeeping (range prefix sum) and in P2G's sum into the grid.
+constexpr std::size_t kLeafGrain = 256;
+constexpr std::size_t kSumLeafGrain = 16;
 
 /// Four floats in one SSE register (GCC/Clang vector extension): a node's (mass, momentum) in P2G and its
 /// (velocity, 0) in G2P, so that each node costs one vector operation instead of four scalar ones.
@@ -162,27 +167,122 @@ void scatterSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, d
     }
 }
 
+/// P2G in two passes, neither of which needs colouring or locks, so that every leaf is a task of its own:
+///  1. each particle leaf scatters into a local block on its stack, writes the block's own-leaf part into its
+///     leaf (no one else writes there yet), and keeps the halo, the parts that belong to its +x/+y/+z
+///     neighbours, in the grid's workspace;
+///  2. each grid leaf adds the halos of the (up to 7) particle leaves below it, in a fixed order, so the
+///     sums do not depend on the thread count.
 template <class K, bool MLS>
-void scatterLeaf(const SparseGrid& grid, std::vector<AnySpecies>& species, uint32_t l, float dt) {
+void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
     using B = LocalBlock<K>;
-    f4 block[B::kNodes];
-    const Vec3i origin = grid.leaf(l).origin;
-    const typename B::Range r = B::reach(species, l, origin, grid.dx());
-    if (B::whole(r)) std::memset(block, 0, sizeof(block));
-    else
-        for (int a = r.lo[0]; a < r.hi[0]; ++a)
-            for (int b = r.lo[1]; b < r.hi[1]; ++b) std::memset(block + B::index(a, b, r.lo[2]), 0, sizeof(f4) * (r.hi[2] - r.lo[2]));
-    for (AnySpecies& s : species)
-        std::visit([&](auto& sp) { scatterSpecies<K, MLS>(sp, sp.leafStart[l], sp.leafStart[l + 1], origin, grid.dx(), dt, block); },
-                   s);
-    // Add the local block into the leaf and its 7 neighbours; the colouring keeps this race free.
-    B::forEachNode(grid, l, r, [&](int n, const LeafView& leaf, int off) {
-        const f4 b = block[n];
-        if (b[0] == 0.0f) return;
-        leaf.mass[off] += b[0];
-        leaf.momentum[3 * off + 0] += b[1];
-        leaf.momentum[3 * off + 1] += b[2];
-        leaf.momentum[3 * off + 2] += b[3];
+    using Range = typename B::Range;
+    const std::vector<uint32_t>& leaves = grid.particleLeaves();
+    const std::size_t P = leaves.size();
+    // Part d of a range: the block nodes that lie in neighbour d (d = 0 the leaf itself).
+    auto part = [](const Range& r, int d) {
+        Range q;
+        for (int a = 0; a < 3; ++a) {
+            const bool up = (d >> (2 - a)) & 1;
+            q.lo[a] = std::max(r.lo[a], up ? kLeafDim : 0);
+            q.hi[a] = std::min(r.hi[a], up ? B::N : kLeafDim);
+        }
+        return q;
+    };
+    auto volume = [](const Range& r) {
+        return std::size_t(std::max(0, r.hi[0] - r.lo[0]) * std::max(0, r.hi[1] - r.lo[1]) * std::max(0, r.hi[2] - r.lo[2]));
+    };
+    auto haloVolume = [&](const Range& r) {
+        std::size_t v = 0;
+        for (int d = 1; d < 8; ++d) v += volume(part(r, d));
+        return v;
+    };
+    std::vector<Range> range(P);
+    std::vector<std::size_t> offset(P);
+    tbb::parallel_for(std::size_t(0), P, [&](std::size_t i) {
+        range[i] = B::reach(species, leaves[i], grid.leaf(leaves[i]).origin, grid.dx());
+    });
+    const std::size_t total = tbb::parallel_scan(
+        tbb::blocked_range<std::size_t>(0, P, kLeafGrain), std::size_t(0),
+        [&](const tbb::blocked_range<std::size_t>& r, std::size_t sum, bool final) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                if (final) offset[i] = sum;
+                sum += haloVolume(range[i]);
+            }
+            return sum;
+        },
+        std::plus<std::size_t>());
+    std::vector<float>& scratch = grid.transferScratch();
+    if (scratch.size() < 4 * total) scratch.resize(4 * total);
+    f4* const halos = reinterpret_cast<f4*>(scratch.data());  // malloc aligns to 16 bytes on x86-64
+
+    // Pass 1. The halo parts d = 1..7 are stored one after another, each x-major over its box.
+    tbb::parallel_for(std::size_t(0), P, [&](std::size_t i) {
+        const uint32_t l = leaves[i];
+        const Range& r = range[i];
+        const LeafView& leaf = grid.leaf(l);
+        f4 block[B::kNodes];
+        if (B::whole(r)) std::memset(static_cast<void*>(block), 0, sizeof(block));
+        else
+            for (int a = r.lo[0]; a < r.hi[0]; ++a)
+                for (int b = r.lo[1]; b < r.hi[1]; ++b)
+                    std::memset(static_cast<void*>(block + B::index(a, b, r.lo[2])), 0, sizeof(f4) * (r.hi[2] - r.lo[2]));
+        for (AnySpecies& s : species)
+            std::visit([&](auto& sp) { scatterSpecies<K, MLS>(sp, sp.leafStart[l], sp.leafStart[l + 1], leaf.origin, grid.dx(), dt, block); },
+                       s);
+        const Range own = part(r, 0);
+        if (volume(own) < std::size_t(kLeafNodes)) {
+            std::memset(leaf.mass, 0, sizeof(float) * kLeafNodes);
+            std::memset(leaf.momentum, 0, sizeof(float) * 3 * kLeafNodes);
+        }
+        for (int a = own.lo[0]; a < own.hi[0]; ++a)
+            for (int b = own.lo[1]; b < own.hi[1]; ++b)
+                for (int c = own.lo[2]; c < own.hi[2]; ++c) {
+                    const f4 v = block[B::index(a, b, c)];
+                    const int o = leafOffset(a, b, c);
+                    leaf.mass[o] = v[0];
+                    leaf.momentum[3 * o + 0] = v[1];
+                    leaf.momentum[3 * o + 1] = v[2];
+                    leaf.momentum[3 * o + 2] = v[3];
+                }
+        f4* out = halos + offset[i];
+        for (int d = 1; d < 8; ++d) {
+            const Range q = part(r, d);
+            if (volume(q) == 0) continue;
+            for (int a = q.lo[0]; a < q.hi[0]; ++a)
+                for (int b = q.lo[1]; b < q.hi[1]; ++b, out += q.hi[2] - q.lo[2])
+                    std::memcpy(static_cast<void*>(out), block + B::index(a, b, q.lo[2]), sizeof(f4) * (q.hi[2] - q.lo[2]));
+        }
+    });
+
+    // Pass 2. Block node (a, b, c) of the particle leaf at offset -d lies in this leaf at (a, b, c) - 8 d.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.leafCount(), kSumLeafGrain), [&](const tbb::blocked_range<std::size_t>& rr) {
+        for (std::size_t g = rr.begin(); g < rr.end(); ++g) {
+            const LeafView& leaf = grid.leaf(g);
+            const std::array<uint32_t, 8>& src = grid.sources(g);
+            if (src[0] == SparseGrid::kNoLeaf) {  // no particles of its own: pass 1 did not write it
+                std::memset(leaf.mass, 0, sizeof(float) * kLeafNodes);
+                std::memset(leaf.momentum, 0, sizeof(float) * 3 * kLeafNodes);
+            }
+            for (int d = 1; d < 8; ++d) {
+                if (src[d] == SparseGrid::kNoLeaf) continue;
+                const Range& r = range[src[d]];
+                const f4* in = halos + offset[src[d]];
+                for (int e = 1; e < d; ++e) in += volume(part(r, e));
+                const Range q = part(r, d);
+                if (volume(q) == 0) continue;
+                const int shift[3] = {kLeafDim * (d >> 2), kLeafDim * ((d >> 1) & 1), kLeafDim * (d & 1)};
+                for (int a = q.lo[0]; a < q.hi[0]; ++a)
+                    for (int b = q.lo[1]; b < q.hi[1]; ++b)
+                        for (int c = q.lo[2]; c < q.hi[2]; ++c, ++in) {
+                            const int o = leafOffset(a - shift[0], b - shift[1], c - shift[2]);
+                            leaf.mass[o] += (*in)[0];
+                            leaf.momentum[3 * o + 0] += (*in)[1];
+                            leaf.momentum[3 * o + 1] += (*in)[2];
+                            leaf.momentum[3 * o + 2] += (*in)[3];
+                        }
+            }
+        }
     });
 }
 
@@ -297,16 +397,7 @@ decltype(auto) withScheme(const TransferSettings& s, F&& f) {
 }  // namespace
 
 void particlesToGrid(SparseGrid& grid, std::vector<AnySpecies>& species, const TransferSettings& s, float dt) {
-    tbb::parallel_for(std::size_t(0), grid.leafCount(), [&](std::size_t l) {
-        const LeafView& leaf = grid.leaf(l);
-        std::memset(leaf.mass, 0, sizeof(float) * kLeafNodes);
-        std::memset(leaf.momentum, 0, sizeof(float) * 3 * kLeafNodes);
-    });
-    withScheme(s, [&]<class K, bool MLS>() {
-        for (const std::vector<uint32_t>& colour : grid.coloredParticleLeaves())
-            tbb::parallel_for(std::size_t(0), colour.size(),
-                              [&](std::size_t i) { scatterLeaf<K, MLS>(grid, species, colour[i], dt); });
-    });
+    withScheme(s, [&]<class K, bool MLS>() { scatterAll<K, MLS>(grid, species, dt); });
 }
 
 G2PSummary gridToParticles(const SparseGrid& grid, std::vector<AnySpecies>& species, const TransferSettings& s, float dt) {

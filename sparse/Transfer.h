@@ -1,9 +1,10 @@
 #pragma once
 // APIC particle-to-grid and grid-to-particle transfers over the leaves of the sparse grid (thesis eq.
 // 3.14-3.19, 3.24; Jiang et al. 2015), with the MLS-MPM fused force (Hu et al. 2018) as an option.
-// P2G runs leaf colour by colour; each task gathers its particles into a dense local block and adds that
-// block into the 8 leaves it overlaps, so no two tasks write one node and every node sums in a fixed
-// order: results are bit-identical whatever the number of threads.
+// P2G runs in two passes, one task per leaf in each: a particle leaf gathers its particles into a dense
+// local block and writes the part in its own leaf, keeping the rest (the halo); then each grid leaf adds
+// the halos that reach it. No two tasks write one node and every node sums in a fixed order: results are
+// bit-identical whatever the number of threads.
 #include <cstdint>
 #include <limits>
 #include <vector>
