@@ -30,18 +30,19 @@ Vec3f Collider::respond(const Vec3f& v, const Vec3f& n, const Vec3f& vc, Boundar
     return vc + tangential;
 }
 
-void Collider::applyToLeaf(const LeafView& leaf, double dx, double time) const {
+void Collider::applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double time) const {
+    if (box.empty()) return;
     const double halfDiagonal = std::sqrt(3.0) * 0.5 * (kLeafDim - 1) * dx;
     const Vec3d centre = (leaf.origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
     if (signedDistance(centre) > halfDiagonal) return;
-    for (int n = 0; n < kLeafNodes; ++n) {
-        if (leaf.mass[n] == 0.0f) continue;
+    box.forEach([&](int n) {
+        if (leaf.mass[n] == 0.0f) return;
         const Vec3d x = (leaf.origin + Vec3i(n >> (2 * kLeafLog2), (n >> kLeafLog2) & (kLeafDim - 1), n & (kLeafDim - 1)))
                             .cast<double>() * dx;
-        if (signedDistance(x) > 0.0) continue;
+        if (signedDistance(x) > 0.0) return;
         Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
         v = respond(v, normal(x).cast<float>(), velocity(x, time).cast<float>(), boundary(), friction());
-    }
+    });
 }
 
 PlaneCollider::PlaneCollider(const Vec3d& point, const Vec3d& normal, Boundary b, float friction)

@@ -10,6 +10,7 @@
 namespace mpm {
 
 struct LeafView;
+struct NodeBox;
 
 enum class Boundary {
     Sticky,    ///< node velocity becomes the collider's
@@ -34,9 +35,9 @@ public:
     Boundary boundary() const { return boundary_; }
     float friction() const { return friction_; }
 
-    /// Applies the boundary condition to every node of a leaf with phi <= 0 and nonzero mass. A leaf whose
+    /// Applies the boundary condition to every node in the box of a leaf with phi <= 0 and nonzero mass. A leaf whose
     /// centre lies farther from the surface than its half diagonal is skipped (phi is 1-Lipschitz).
-    void applyToLeaf(const LeafView& leaf, double dx, double time) const;
+    void applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double time) const;
 
     /// The node response: v is the node velocity before the collision, n the outward normal, vc the
     /// collider velocity. Coulomb friction scales with the normal velocity change |v_after - v|.

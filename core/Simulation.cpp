@@ -169,16 +169,19 @@ float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique
         [&](const tbb::blocked_range<std::size_t>& r, float vmax) {
             for (std::size_t l = r.begin(); l < r.end(); ++l) {
                 const LeafView& leaf = grid.leaf(l);
+                // Only the nodes P2G wrote: all others are zero, and stay so.
+                const NodeBox& box = grid.writtenBox(l);
                 // v = (mv) / m on nodes with mass (exact comparison: a threshold would lose momentum), then gravity.
-                for (int n = 0; n < kLeafNodes; ++n) {
+                box.forEach([&](int n) {
                     Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
                     const float m = leaf.mass[n];
                     if (m != 0.0f) v = v / m + dt * g;
                     else v.setZero();
-                }
-                for (const auto& c : colliders) c->applyToLeaf(leaf, grid.dx(), tEnd);
-                for (int n = 0; n < kLeafNodes; ++n)
+                });
+                for (const auto& c : colliders) c->applyToLeaf(leaf, box, grid.dx(), tEnd);
+                box.forEach([&](int n) {
                     if (leaf.mass[n] != 0.0f) vmax = std::max(vmax, Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm());
+                });
             }
             return vmax;
         },

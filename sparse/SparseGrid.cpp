@@ -64,7 +64,11 @@ struct LeafCollector {
 struct SparseGrid::Trees {
     MassTree mass{0.0f};
     MomentumTree momentum{openvdb::Vec3s(0.0f)};
-    LeafIndexTree leafIndex{-1};  ///< one voxel per grid leaf, at its leaf coordinate
+    /// One voxel per grid leaf, at its leaf coordinate, holding the leaf's index; two, so that the last
+    /// update's index survives the next one (to carry each leaf's written box over).
+    LeafIndexTree indexTrees[2] = {LeafIndexTree(-1), LeafIndexTree(-1)};
+    LeafIndexTree* leafIndex = &indexTrees[0];
+    LeafIndexTree* previousIndex = &indexTrees[1];
     LeafMaskTree particleLeaves;  ///< leaf coordinates that hold particles
     LeafMaskTree gridLeaves;      ///< particle leaves dilated by one towards +x, +y, +z
 };
@@ -119,11 +123,14 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
         openvdb::tools::pruneInactive(t.momentum);
     }
 
-    t.leafIndex.clear();
+    // Keep the old index and boxes, to hand each surviving leaf its box (a new leaf is all zero).
+    std::swap(t.leafIndex, t.previousIndex);
+    writtenBefore_.swap(written_);
+    t.leafIndex->clear();
     leaves_.clear();
     hasParticles_.clear();
     {
-        openvdb::tree::ValueAccessor<LeafIndexTree> idx(t.leafIndex);
+        openvdb::tree::ValueAccessor<LeafIndexTree> idx(*t.leafIndex);
         openvdb::tree::ValueAccessor<MassTree> massAcc(t.mass);
         openvdb::tree::ValueAccessor<MomentumTree> momAcc(t.momentum);
         for (auto it = t.gridLeaves.cbeginValueOn(); it; ++it) {
@@ -150,14 +157,21 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
         if (hasParticles_[l]) particleLeaves_.push_back(l);
     neighbours_.resize(L);
     sources_.resize(L);
+    written_.resize(L);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L, kLeafGrain), [&](const tbb::blocked_range<std::size_t>& range) {
-        for (std::size_t l = range.begin(); l < range.end(); ++l) sources_[l].fill(kNoLeaf);
+        openvdb::tree::ValueAccessor<const LeafIndexTree> before(*t.previousIndex);
+        for (std::size_t l = range.begin(); l < range.end(); ++l) {
+            sources_[l].fill(kNoLeaf);
+            const Vec3i c = leaves_[l].origin / kLeafDim;
+            const int32_t old = before.getValue(openvdb::Coord(c[0], c[1], c[2]));
+            written_[l] = old >= 0 ? writtenBefore_[old] : NodeBox{};
+        }
     });
     // The tree lookups, the costly part, in parallel (read-only accessors, one per task). Each (leaf, d)
     // of the inverse has one source, so the tasks write disjoint entries.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particleLeaves_.size(), kLeafGrain),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-                          openvdb::tree::ValueAccessor<const LeafIndexTree> idx(t.leafIndex);
+                          openvdb::tree::ValueAccessor<const LeafIndexTree> idx(*t.leafIndex);
                           for (std::size_t i = range.begin(); i < range.end(); ++i) {
                               const uint32_t l = particleLeaves_[i];
                               const Vec3i c = leaves_[l].origin / kLeafDim;
@@ -187,7 +201,7 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
         // The destination array first holds each particle's leaf, then (in place) its sorted slot.
         std::vector<uint32_t>& dest = *r.destination;
         tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-            openvdb::tree::ValueAccessor<const LeafIndexTree> idx(t.leafIndex);
+            openvdb::tree::ValueAccessor<const LeafIndexTree> idx(*t.leafIndex);
             uint32_t* hist = histogram_.data() + c * L;
             const std::size_t end = std::min(N, (c + 1) * chunkSize);
             openvdb::Coord last(std::numeric_limits<int32_t>::max());
@@ -244,10 +258,11 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
 
 std::size_t SparseGrid::memoryBytes() const {
     const Trees& t = *trees_;
-    return std::size_t(t.mass.memUsage() + t.momentum.memUsage() + t.leafIndex.memUsage() + t.particleLeaves.memUsage() +
+    return std::size_t(t.mass.memUsage() + t.momentum.memUsage() + t.leafIndex->memUsage() + t.particleLeaves.memUsage() +
                        t.gridLeaves.memUsage()) +
            leaves_.capacity() * sizeof(LeafView) + neighbours_.capacity() * sizeof(std::array<uint32_t, 8>) +
            sources_.capacity() * sizeof(std::array<uint32_t, 8>) + transferScratch_.capacity() * sizeof(float) +
+           (written_.capacity() + writtenBefore_.capacity()) * sizeof(NodeBox) + std::size_t(t.previousIndex->memUsage()) +
            histogram_.capacity() * sizeof(uint32_t) +
            leafCount_.capacity() * sizeof(uint32_t);
 }

@@ -3,6 +3,7 @@
 // velocity: Vec3s) that share one topology. A leaf exists only where some particle's stencil reaches and
 // is released when none does, so the domain is unbounded and memory follows the occupied volume.
 // OpenVDB stays inside SparseGrid.cpp: this header exposes raw leaf buffers only.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -33,6 +34,28 @@ struct LeafView {
     float* mass = nullptr;
     float* momentum = nullptr;  ///< 3 floats per node; holds velocity after the grid update
     Vec3i origin = Vec3i::Zero();
+};
+
+/// A box of a leaf's nodes, [lo, hi) per axis in leaf-local coordinates 0..8; empty when lo >= hi on an axis.
+struct NodeBox {
+    int8_t lo[3] = {kLeafDim, kLeafDim, kLeafDim};
+    int8_t hi[3] = {0, 0, 0};
+    bool empty() const { return lo[0] >= hi[0] || lo[1] >= hi[1] || lo[2] >= hi[2]; }
+    /// Grows this box to hold b too.
+    void add(const NodeBox& b) {
+        if (b.empty()) return;
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], b.lo[a]);
+            hi[a] = std::max(hi[a], b.hi[a]);
+        }
+    }
+    /// Calls f(node offset) for every node in the box, the innermost (z) runs contiguous in memory.
+    template <class F>
+    void forEach(F&& f) const {
+        for (int x = lo[0]; x < hi[0]; ++x)
+            for (int y = lo[1]; y < hi[1]; ++y)
+                for (int z = lo[2]; z < hi[2]; ++z) f(leafOffset(x, y, z));
+    }
 };
 
 /// What binning needs to know about one species, and what it hands back.
@@ -77,6 +100,11 @@ public:
     /// neighbours()[d] it is (the one at leaf coordinate - offset d), or kNoLeaf.
     static constexpr uint32_t kNoLeaf = ~0u;
     const std::array<uint32_t, 8>& sources(std::size_t leafIndex) const { return sources_[leafIndex]; }
+    /// The nodes of leaf i that P2G wrote (the grid update and G2P touch no others); every node outside
+    /// is zero. A leaf that lives on keeps its box through updateTopology, so that the next P2G zeroes only
+    /// that box: a lone particle then costs its stencil, not the 8 leaves (4096 nodes) the stencil touches.
+    NodeBox& writtenBox(std::size_t i) { return written_[i]; }
+    const NodeBox& writtenBox(std::size_t i) const { return written_[i]; }
     /// Workspace of the transfers, kept between substeps so that it is allocated once.
     std::vector<float>& transferScratch() { return transferScratch_; }
 
@@ -100,6 +128,7 @@ private:
     std::vector<uint32_t> particleLeaves_;
     std::vector<std::array<uint32_t, 8>> neighbours_;
     std::vector<std::array<uint32_t, 8>> sources_;
+    std::vector<NodeBox> written_, writtenBefore_;
     std::vector<float> transferScratch_;
     std::vector<uint32_t> histogram_;
     std::vector<uint32_t> leafCount_;  ///< particles per leaf, for the parallel prefix sum

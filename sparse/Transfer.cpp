@@ -167,6 +167,18 @@ void scatterSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, d
     }
 }
 
+/// Zeroes the nodes of a leaf in box b.
+void zero(const LeafView& leaf, const NodeBox& b) {
+    if (b.empty()) return;
+    const int run = b.hi[2] - b.lo[2];
+    for (int x = b.lo[0]; x < b.hi[0]; ++x)
+        for (int y = b.lo[1]; y < b.hi[1]; ++y) {
+            const int o = leafOffset(x, y, b.lo[2]);
+            std::memset(leaf.mass + o, 0, sizeof(float) * run);
+            std::memset(leaf.momentum + 3 * o, 0, sizeof(float) * 3 * run);
+        }
+}
+
 /// P2G in two passes, neither of which needs colouring or locks, so that every leaf is a task of its own:
 ///  1. each particle leaf scatters into a local block on its stack, writes the block's own-leaf part into its
 ///     leaf (no one else writes there yet), and keeps the halo, the parts that belong to its +x/+y/+z
@@ -191,6 +203,16 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
     };
     auto volume = [](const Range& r) {
         return std::size_t(std::max(0, r.hi[0] - r.lo[0]) * std::max(0, r.hi[1] - r.lo[1]) * std::max(0, r.hi[2] - r.lo[2]));
+    };
+    // Part d of a range in the coordinates of neighbour d.
+    auto box = [](const Range& q, int d) {
+        NodeBox b;
+        for (int a = 0; a < 3; ++a) {
+            const int shift = ((d >> (2 - a)) & 1) * kLeafDim;
+            b.lo[a] = int8_t(q.lo[a] - shift);
+            b.hi[a] = int8_t(q.hi[a] - shift);
+        }
+        return b;
     };
     auto haloVolume = [&](const Range& r) {
         std::size_t v = 0;
@@ -231,10 +253,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
             std::visit([&](auto& sp) { scatterSpecies<K, MLS>(sp, sp.leafStart[l], sp.leafStart[l + 1], leaf.origin, grid.dx(), dt, block); },
                        s);
         const Range own = part(r, 0);
-        if (volume(own) < std::size_t(kLeafNodes)) {
-            std::memset(leaf.mass, 0, sizeof(float) * kLeafNodes);
-            std::memset(leaf.momentum, 0, sizeof(float) * 3 * kLeafNodes);
-        }
+        if (volume(own) < std::size_t(kLeafNodes)) zero(leaf, grid.writtenBox(l));  // what the last substep left
         for (int a = own.lo[0]; a < own.hi[0]; ++a)
             for (int b = own.lo[1]; b < own.hi[1]; ++b)
                 for (int c = own.lo[2]; c < own.hi[2]; ++c) {
@@ -260,10 +279,9 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
         for (std::size_t g = rr.begin(); g < rr.end(); ++g) {
             const LeafView& leaf = grid.leaf(g);
             const std::array<uint32_t, 8>& src = grid.sources(g);
-            if (src[0] == SparseGrid::kNoLeaf) {  // no particles of its own: pass 1 did not write it
-                std::memset(leaf.mass, 0, sizeof(float) * kLeafNodes);
-                std::memset(leaf.momentum, 0, sizeof(float) * 3 * kLeafNodes);
-            }
+            NodeBox written;
+            if (src[0] == SparseGrid::kNoLeaf) zero(leaf, grid.writtenBox(g));  // no particles of its own: pass 1 did not write it
+            else written = box(part(range[src[0]], 0), 0);
             for (int d = 1; d < 8; ++d) {
                 if (src[d] == SparseGrid::kNoLeaf) continue;
                 const Range& r = range[src[d]];
@@ -272,6 +290,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
                 const Range q = part(r, d);
                 if (volume(q) == 0) continue;
                 const int shift[3] = {kLeafDim * (d >> 2), kLeafDim * ((d >> 1) & 1), kLeafDim * (d & 1)};
+                written.add(box(q, d));
                 for (int a = q.lo[0]; a < q.hi[0]; ++a)
                     for (int b = q.lo[1]; b < q.hi[1]; ++b)
                         for (int c = q.lo[2]; c < q.hi[2]; ++c, ++in) {
@@ -282,6 +301,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
                             leaf.momentum[3 * o + 2] += (*in)[3];
                         }
             }
+            grid.writtenBox(g) = written;
         }
     });
 }

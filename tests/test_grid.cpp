@@ -84,3 +84,44 @@ TEST(SparseGrid, EveryParticleIsBinnedInsideItsLeaf) {
             EXPECT_TRUE(rel.minCoeff() >= 0 && rel.maxCoeff() < kLeafDim);
         }
 }
+
+TEST(SparseGrid, NodesOutsideTheWrittenBoxesStayZeroAsSprayMoves) {
+    // P2G zeroes only what the last substep wrote in a leaf that lives on. If that bookkeeping slipped,
+    // last substep's values would survive into this one's sums: the grid's mass would exceed the particles'.
+    SimulationSettings s;
+    s.dx = 0.1;
+    s.gravity = Vec3d(0, -9.81, 0);
+    Simulation sim(s);
+    // A block (whole leaves) and lone particles flying apart at up to half a cell per substep, so that
+    // they move through their leaves and into new ones while the old leaves still hold last step's values.
+    addWaterBlock(sim, Vec3d::Zero(), Vec3d(0.8, 0.8, 0.8));
+    Species<Water> spray;
+    spray.name = "spray";
+    const int id = sim.addSpecies(std::move(spray));
+    std::vector<Vec3d> lone;
+    std::vector<Vec3f> velocity;
+    for (int i = 0; i < 6; ++i) lone.emplace_back(2.0 + 1.7 * i, 0.33 + 0.1 * i, 0.05 * i);
+    const double vol = 0.125 * s.dx * s.dx * s.dx;
+    for (std::size_t i = 0; i < lone.size(); ++i)
+        sim.addParticles(id, {lone[i]}, Vec3f(float(i % 3) - 1.0f, 1.0f - float(i % 2) * 2.0f, 0.5f) * 40.0f, float(vol * 1000.0),
+                         float(vol), 0);
+    const double particleMass = sim.measure().mass;
+    for (int step = 0; step < 40; ++step) {
+        sim.substep(1e-3);
+        double gridMass = 0.0;
+        std::size_t strayNodes = 0;
+        for (std::size_t l = 0; l < sim.grid().leafCount(); ++l) {
+            const LeafView& leaf = sim.grid().leaf(l);
+            std::vector<char> inBox(kLeafNodes, 0);
+            sim.grid().writtenBox(l).forEach([&](int n) { inBox[n] = 1; });
+            for (int n = 0; n < kLeafNodes; ++n) {
+                gridMass += leaf.mass[n];
+                const bool zero = leaf.mass[n] == 0.0f && leaf.momentum[3 * n] == 0.0f && leaf.momentum[3 * n + 1] == 0.0f &&
+                                  leaf.momentum[3 * n + 2] == 0.0f;
+                if (!inBox[n] && !zero) ++strayNodes;
+            }
+        }
+        ASSERT_EQ(strayNodes, 0u) << "substep " << step;
+        ASSERT_NEAR(gridMass, particleMass, 1e-5 * particleMass) << "substep " << step;
+    }
+}
