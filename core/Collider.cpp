@@ -30,12 +30,6 @@ Vec3f Collider::respond(const Vec3f& v, const Vec3f& n, const Vec3f& vc, Boundar
     return vc + tangential;
 }
 
-Vec3f Collider::mirrorResponse(const Vec3f& vm, const Vec3f& n, const Vec3f& vc, Boundary boundary) {
-    const Vec3f rel = vm - vc;
-    if (boundary == Boundary::Sticky) return vc - rel;
-    return vc + rel - 2.0f * rel.dot(n) * n;
-}
-
 void Collider::applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double time) const {
     if (box.empty()) return;
     const double halfDiagonal = std::sqrt(3.0) * 0.5 * (kLeafDim - 1) * dx;

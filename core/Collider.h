@@ -43,16 +43,6 @@ public:
     /// collider velocity. Coulomb friction scales with the normal velocity change |v_after - v|.
     static Vec3f respond(const Vec3f& v, const Vec3f& n, const Vec3f& vc, Boundary boundary, float friction);
 
-    /// Whether nodes beyond the surface take the mirror image of the velocity field (mirrorResponse): sticky
-    /// walls, where the body is held. Slip and separating walls keep respond() on every node: mirroring
-    /// slip walls too halved the manufactured-solution error, but it made the hydrostatic column's floor
-    /// pressure 2.3% high (from 0.45%; the floor alone mirrored gave 0.38%, so the side walls do it, and
-    /// not through water's J clamp: the same with tension on). Not understood yet, so not shipped.
-    bool mirrorsGhostNodes() const { return boundary_ == Boundary::Sticky; }
-    /// A node beyond the surface, given the velocity vm at its mirror point: sticky v = 2 vc - vm (the field
-    /// minus vc is odd across the wall); slip keeps vm's tangential part and makes the normal part odd.
-    static Vec3f mirrorResponse(const Vec3f& vm, const Vec3f& n, const Vec3f& vc, Boundary boundary);
-
 private:
     Boundary boundary_;
     float friction_;

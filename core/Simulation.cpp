@@ -162,69 +162,9 @@ void Simulation::bin() {
     clock.lap(phases_.binning);
 }
 
-namespace {
-
-/// A node counts as beyond a mirroring wall once it is this many cells inside; nodes on the surface (to
-/// round-off) keep the plain response.
-constexpr double kGhostDepth = 1e-3;
-/// The mirror image needs this share of its interpolation weight on nodes that hold mass on the body's
-/// side; with less (a lone particle deep in the wall), the node keeps the plain response.
-constexpr double kMinMirrorWeight = 0.5;
-
-/// Nodes beyond a sticky or frictionless slip wall that hold mass (particles within a stencil of the wall
-/// reach them) take the mirror image of the velocity at their reflection x - 2 phi n, trilinear from the
-/// nodes on the body's side. Holding them at the wall velocity instead makes the velocity gradient of the
-/// particles next to the wall too small, by 25% for the first layer: a wall half a cell farther out.
-/// Each task writes nodes with phi < 0 and reads nodes with phi >= 0 only, so the pass is race free.
-float mirrorGhostNodes(const SparseGrid& grid, const Collider& c, double time) {
-    const double dx = grid.dx();
-    const double halfDiagonal = std::sqrt(3.0) * 0.5 * (kLeafDim - 1) * dx;
-    return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, grid.leafCount()), 0.0f,
-        [&](const tbb::blocked_range<std::size_t>& r, float vmax) {
-            SparseGrid::NodeReader reader(grid);
-            for (std::size_t l = r.begin(); l < r.end(); ++l) {
-                const LeafView& leaf = grid.leaf(l);
-                const Vec3d centre = (leaf.origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
-                if (c.signedDistance(centre) > halfDiagonal) continue;
-                grid.writtenBox(l).forEach([&](int n) {
-                    if (leaf.mass[n] == 0.0f) return;
-                    const Vec3i node = leaf.origin + Vec3i(n >> (2 * kLeafLog2), (n >> kLeafLog2) & (kLeafDim - 1), n & (kLeafDim - 1));
-                    const Vec3d x = node.cast<double>() * dx;
-                    const double phi = c.signedDistance(x);
-                    if (phi >= -kGhostDepth * dx) return;
-                    const Vec3d normal = c.normal(x);
-                    const Vec3d g = (x - 2.0 * phi * normal) / dx;
-                    const Vec3i base(floorToInt(g[0]), floorToInt(g[1]), floorToInt(g[2]));
-                    const Vec3d f = g - base.cast<double>();
-                    Vec3f sum = Vec3f::Zero();
-                    double weight = 0.0;
-                    for (int k = 0; k < 8; ++k) {
-                        const Vec3i corner = base + Vec3i(k >> 2, (k >> 1) & 1, k & 1);
-                        const double w = (k >> 2 ? f[0] : 1.0 - f[0]) * ((k >> 1) & 1 ? f[1] : 1.0 - f[1]) * (k & 1 ? f[2] : 1.0 - f[2]);
-                        if (w == 0.0 || c.signedDistance(corner.cast<double>() * dx) < 0.0) continue;
-                        int off = 0;
-                        const LeafView* other = reader.find(corner, off);
-                        if (!other || other->mass[off] == 0.0f) continue;
-                        sum += float(w) * Eigen::Map<const Vec3f>(other->momentum + 3 * off);
-                        weight += w;
-                    }
-                    if (weight < kMinMirrorWeight) return;
-                    Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
-                    v = Collider::mirrorResponse(sum / float(weight), normal.cast<float>(), c.velocity(x, time).cast<float>(), c.boundary());
-                    vmax = std::max(vmax, v.norm());
-                });
-            }
-            return vmax;
-        },
-        [](float a, float b) { return std::max(a, b); });
-}
-
-}  // namespace
-
 float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders,
                            const Vec3f& g, float dt, double tEnd) {
-    float vmax = tbb::parallel_reduce(
+    return tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, grid.leafCount()), 0.0f,
         [&](const tbb::blocked_range<std::size_t>& r, float vmax) {
             for (std::size_t l = r.begin(); l < r.end(); ++l) {
@@ -246,10 +186,6 @@ float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique
             return vmax;
         },
         [](float a, float b) { return std::max(a, b); });
-    // One collider after another: a node beyond one wall may be on the body's side of the next.
-    for (const auto& c : colliders)
-        if (c->mirrorsGhostNodes()) vmax = std::max(vmax, mirrorGhostNodes(grid, *c, tEnd));
-    return vmax;
 }
 
 float Simulation::updateGrid(float dt) {

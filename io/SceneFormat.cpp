@@ -88,7 +88,7 @@ lambda_scale and mu_scale multiply the Lame parameters computed from E and nu.
 | type | plane | plane, sphere | |
 | point, normal | [0,0,0], [0,1,0] | 3 numbers | plane through point; material stays on the normal's side |
 | center, radius | required | | sphere |
-| boundary | slip | sticky, slip, separate | sticky: stop (nodes beyond the surface mirror the velocity field); slip: remove normal velocity; separate: only when moving in |
+| boundary | slip | sticky, slip, separate | sticky: stop; slip: remove normal velocity; separate: only when moving in |
 | friction | 0 | >= 0 | Coulomb coefficient (slip and separate) |
 )";
 }

@@ -256,26 +256,6 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
     }
 }
 
-struct SparseGrid::NodeReader::Impl {
-    openvdb::tree::ValueAccessor<const LeafIndexTree> index;
-    explicit Impl(const LeafIndexTree& t) : index(t) {}
-};
-
-SparseGrid::NodeReader::NodeReader(const SparseGrid& grid)
-    : grid_(grid), impl_(std::make_unique<Impl>(*grid.trees_->leafIndex)) {}
-SparseGrid::NodeReader::~NodeReader() = default;
-
-const LeafView* SparseGrid::NodeReader::find(const Vec3i& n, int& offset) {
-    const Vec3i leafCoord(n[0] >> kLeafLog2, n[1] >> kLeafLog2, n[2] >> kLeafLog2);
-    if (leafCoord != lastLeaf_) {
-        const int32_t l = impl_->index.getValue(openvdb::Coord(leafCoord[0], leafCoord[1], leafCoord[2]));
-        lastLeaf_ = leafCoord;
-        last_ = l >= 0 ? &grid_.leaves_[std::size_t(l)] : nullptr;
-    }
-    offset = leafOffset(n[0] & (kLeafDim - 1), n[1] & (kLeafDim - 1), n[2] & (kLeafDim - 1));
-    return last_;
-}
-
 std::size_t SparseGrid::memoryBytes() const {
     const Trees& t = *trees_;
     return std::size_t(t.mass.memUsage() + t.momentum.memUsage() + t.leafIndex->memUsage() + t.particleLeaves.memUsage() +

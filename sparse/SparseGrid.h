@@ -7,7 +7,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <memory>
 #include <vector>
 
@@ -106,22 +105,6 @@ public:
     /// that box: a lone particle then costs its stencil, not the 8 leaves (4096 nodes) the stencil touches.
     NodeBox& writtenBox(std::size_t i) { return written_[i]; }
     const NodeBox& writtenBox(std::size_t i) const { return written_[i]; }
-    /// Finds nodes by integer coordinate. Not thread-safe: one reader per task; it caches the last leaf.
-    class NodeReader {
-    public:
-        explicit NodeReader(const SparseGrid& grid);
-        ~NodeReader();
-        /// The leaf that holds node n and n's offset in it, or nullptr where no leaf does.
-        const LeafView* find(const Vec3i& n, int& offset);
-
-    private:
-        struct Impl;
-        const SparseGrid& grid_;
-        std::unique_ptr<Impl> impl_;
-        Vec3i lastLeaf_ = Vec3i::Constant(std::numeric_limits<int>::min());
-        const LeafView* last_ = nullptr;
-    };
-
     /// Workspace of the transfers, kept between substeps so that it is allocated once.
     std::vector<float>& transferScratch() { return transferScratch_; }
 
