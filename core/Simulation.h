@@ -63,7 +63,7 @@ struct Emitter {
 /// Wall seconds spent in each phase of the substeps since the last reset (bench/ reports their shares).
 /// The deformation update and return mapping run fused inside G2P, so their cost is part of g2p.
 struct PhaseSeconds {
-    double topology = 0.0;  ///< leaf set, release, colours and neighbour tables
+    double topology = 0.0;  ///< leaf set, release and neighbour tables
     double binning = 0.0;   ///< counting sort by leaf and the permutation of particle arrays
     double p2g = 0.0;       ///< grid clear and particle-to-grid scatter, stress included
     double grid = 0.0;      ///< grid velocity update, gravity and colliders
