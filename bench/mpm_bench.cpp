@@ -239,6 +239,7 @@ int main(int argc, char** argv) {
         c->add_option("--threads", o.threads, "worker threads")->check(CLI::PositiveNumber);
         c->add_option("--blobs", o.scene.blobs, "1 block or 8 blobs")->check(CLI::IsMember({1, 8}));
         c->add_option("--spread", o.scene.spreadCells, "edge of the cube the 8 blobs sit on, in cells");
+        c->add_flag("--spray", o.scene.spray, "particles scattered at random, most alone in their leaf");
     };
     CLI::App* one = app.add_subcommand("one", "one timed run; prints one CSV row");
     addScene(one);

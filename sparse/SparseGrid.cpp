@@ -39,25 +39,62 @@ openvdb::Coord leafCoordOf(const SparseGrid& grid, const Vec3d& x) {
     return openvdb::Coord(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2);
 }
 
-/// Collects the set of leaf coordinates (base node >> 3) that hold particles.
+/// For each of the 8 spill patterns s (bit 2: +x, bit 1: +y, bit 0: +z), the neighbours d = (dx, dy, dz) in
+/// {0,1}^3 that a stencil with that pattern reaches: every d inside s.
+constexpr std::array<uint8_t, 8> reachedNeighbours() {
+    std::array<uint8_t, 8> m{};
+    for (int spill = 0; spill < 8; ++spill)
+        for (int d = 0; d < 8; ++d)
+            if ((d & ~spill) == 0) m[spill] |= uint8_t(1u << d);
+    return m;
+}
+
+/// Collects the leaves that hold particles (by their stencil's base node) and the leaves the stencils
+/// reach: a particle's own leaf and, along each axis where its stencil runs past the leaf's last node, the
+/// next one. A lone particle so needs about 2 leaves on average instead of all 8 around it.
 struct LeafCollector {
     const std::vector<Vec3d>& x;
     const SparseGrid& grid;
-    LeafMaskTree tree;
-    LeafCollector(const std::vector<Vec3d>& xs, const SparseGrid& g) : x(xs), grid(g) {}
-    LeafCollector(LeafCollector& o, tbb::split) : x(o.x), grid(o.grid) {}
+    int width;
+    LeafMaskTree particles, reached;
+    LeafCollector(const std::vector<Vec3d>& xs, const SparseGrid& g, int w) : x(xs), grid(g), width(w) {}
+    LeafCollector(LeafCollector& o, tbb::split) : x(o.x), grid(o.grid), width(o.width) {}
     void operator()(const tbb::blocked_range<std::size_t>& r) {
-        openvdb::tree::ValueAccessor<LeafMaskTree> acc(tree);
-        // Particles are sorted by leaf from the last substep: runs of one leaf need one tree access.
-        openvdb::Coord last(std::numeric_limits<int32_t>::max());
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const openvdb::Coord c = leafCoordOf(grid, x[i]);
-            if (c == last) continue;
-            acc.setValueOn(c);
-            last = c;
+        static constexpr std::array<uint8_t, 8> kReached = reachedNeighbours();
+        constexpr unsigned kAllNeighbours = 0xFF;
+        openvdb::tree::ValueAccessor<LeafMaskTree> own(particles), all(reached);
+        // Particles are sorted by leaf from the last substep: a run of one leaf is entered once, with the
+        // neighbours its stencils reach gathered in a register (no call inside the run's loop).
+        std::size_t i = r.begin();
+        Vec3i b = i < r.end() ? grid.baseNode(x[i]) : Vec3i::Zero();
+        while (i < r.end()) {
+            const Vec3i leaf(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2);
+            unsigned mask = 0;
+            do {
+                if (mask != kAllNeighbours) {  // in bulk a run saturates after a few particles
+                    const int spill = (((b[0] & (kLeafDim - 1)) + width - 1) >> kLeafLog2) << 2 |
+                                      (((b[1] & (kLeafDim - 1)) + width - 1) >> kLeafLog2) << 1 |
+                                      (((b[2] & (kLeafDim - 1)) + width - 1) >> kLeafLog2);
+                    mask |= kReached[spill];
+                }
+                if (++i == r.end()) break;
+                b = grid.baseNode(x[i]);
+            } while ((b[0] >> kLeafLog2) == leaf[0] && (b[1] >> kLeafLog2) == leaf[1] && (b[2] >> kLeafLog2) == leaf[2]);
+            enter(own, all, openvdb::Coord(leaf[0], leaf[1], leaf[2]), mask);
         }
     }
-    void join(LeafCollector& o) { tree.topologyUnion(o.tree); }
+    /// Marks leaf c as holding particles and the neighbours in mask as reached.
+    static void enter(openvdb::tree::ValueAccessor<LeafMaskTree>& own, openvdb::tree::ValueAccessor<LeafMaskTree>& all,
+                      const openvdb::Coord& c, unsigned mask) {
+        if (mask == 0) return;
+        own.setValueOn(c);
+        for (int d = 0; d < 8; ++d)
+            if (mask >> d & 1u) all.setValueOn(c.offsetBy(d >> 2, (d >> 1) & 1, d & 1));
+    }
+    void join(LeafCollector& o) {
+        particles.topologyUnion(o.particles);
+        reached.topologyUnion(o.reached);
+    }
 };
 }  // namespace
 
@@ -70,7 +107,7 @@ struct SparseGrid::Trees {
     LeafIndexTree* leafIndex = &indexTrees[0];
     LeafIndexTree* previousIndex = &indexTrees[1];
     LeafMaskTree particleLeaves;  ///< leaf coordinates that hold particles
-    LeafMaskTree gridLeaves;      ///< particle leaves dilated by one towards +x, +y, +z
+    LeafMaskTree gridLeaves;      ///< leaves some particle's stencil reaches
 };
 
 SparseGrid::SparseGrid() : trees_(std::make_unique<Trees>()) { openvdb::initialize(); }
@@ -88,26 +125,19 @@ void SparseGrid::configure(double dx, double baseShift, int stencilWidth) {
 void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
     Trees& t = *trees_;
 
-    // 1. Leaves that hold particles (a union of per-task sets; the union does not depend on the split).
+    // 1. Leaves that hold particles, and the leaves their stencils reach (unions of per-task sets; a union
+    //    does not depend on the split). A stencil (3 or 4 nodes) is narrower than a leaf (8 nodes), so it
+    //    spans at most its own leaf and the next one along each axis.
     t.particleLeaves.clear();
-    for (const BinRequest& r : requests) {
-        LeafCollector collect(*r.positions, *this);
-        tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, r.positions->size(), kScanGrain), collect);
-        t.particleLeaves.topologyUnion(collect.tree);
-    }
-
-    // 2. Grid leaves: a particle's stencil spans at most its own leaf and the next one along each axis,
-    //    because the stencil (3 or 4 nodes) is narrower than a leaf (8 nodes).
     t.gridLeaves.clear();
-    {
-        openvdb::tree::ValueAccessor<LeafMaskTree> acc(t.gridLeaves);
-        for (auto it = t.particleLeaves.cbeginValueOn(); it; ++it) {
-            const openvdb::Coord c = it.getCoord();
-            for (int d = 0; d < 8; ++d) acc.setValueOn(c.offsetBy(d >> 2, (d >> 1) & 1, d & 1));
-        }
+    for (const BinRequest& r : requests) {
+        LeafCollector collect(*r.positions, *this, stencilWidth_);
+        tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, r.positions->size(), kScanGrain), collect);
+        t.particleLeaves.topologyUnion(collect.particles);
+        t.gridLeaves.topologyUnion(collect.reached);
     }
 
-    // 3. Release value-tree leaves no stencil reaches any more, then allocate the new ones.
+    // 2. Release value-tree leaves no stencil reaches any more, then allocate the new ones.
     std::vector<openvdb::Coord> stale;
     for (auto it = t.mass.cbeginLeaf(); it; ++it) {
         const openvdb::Coord o = it->origin();
@@ -151,7 +181,7 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
     }
     const std::size_t L = leaves_.size();
 
-    // 4. Particle leaves, their 8 neighbours (looked up once per leaf, not per particle) and the inverse.
+    // 3. Particle leaves, their 8 neighbours (looked up once per leaf, not per particle) and the inverse.
     particleLeaves_.clear();
     for (uint32_t l = 0; l < L; ++l)
         if (hasParticles_[l]) particleLeaves_.push_back(l);
@@ -178,8 +208,8 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
                               for (int d = 0; d < 8; ++d) {
                                   const uint32_t n = uint32_t(
                                       idx.getValue(openvdb::Coord(c[0] + (d >> 2), c[1] + ((d >> 1) & 1), c[2] + (d & 1))));
-                                  neighbours_[l][d] = n;
-                                  sources_[n][d] = uint32_t(i);
+                                  neighbours_[l][d] = n;  // kNoLeaf where no stencil of this leaf reaches
+                                  if (n != kNoLeaf) sources_[n][d] = uint32_t(i);
                               }
                           }
                       });

@@ -79,7 +79,7 @@ public:
     double dx() const { return dx_; }
 
     /// Bins all particles by the leaf holding their stencil's base node, allocates the leaves their
-    /// stencils reach (own leaf plus the +x/+y/+z neighbours), releases the rest, and returns, for every
+    /// stencils reach (own leaf plus the +x/+y/+z neighbours they spill into), releases the rest, and returns, for every
     /// species, a stable counting-sort permutation and each leaf's particle range.
     void rebuild(std::vector<BinRequest>& requests) {
         updateTopology(requests);
@@ -94,7 +94,8 @@ public:
     const LeafView& leaf(std::size_t i) const { return leaves_[i]; }
     /// All leaves holding particles, in leaf order.
     const std::vector<uint32_t>& particleLeaves() const { return particleLeaves_; }
-    /// The 8 leaves at leaf coordinate + {0,1}^3 of a particle leaf, index (dx*4 + dy*2 + dz).
+    /// The 8 leaves at leaf coordinate + {0,1}^3 of a particle leaf, index (dx*4 + dy*2 + dz); kNoLeaf for a
+    /// neighbour that none of its particles' stencils reaches (it is not allocated).
     const std::array<uint32_t, 8>& neighbours(std::size_t leafIndex) const { return neighbours_[leafIndex]; }
     /// The inverse: for any leaf, entry d is the position in particleLeaves() of the particle leaf whose
     /// neighbours()[d] it is (the one at leaf coordinate - offset d), or kNoLeaf.

@@ -80,8 +80,10 @@ struct LocalBlock {
         for (int a = lo0; a < hi0; ++a)
             for (int b = lo1; b < hi1; ++b)
                 for (int c = lo2; c < hi2; ++c) {
-                    const LeafView& leaf = grid.leaf(nb[((a >> kLeafLog2) << 2) | ((b >> kLeafLog2) << 1) | (c >> kLeafLog2)]);
-                    f(index(a, b, c), leaf, leafOffset(a & (kLeafDim - 1), b & (kLeafDim - 1), c & (kLeafDim - 1)));
+                    // A neighbour that no stencil of this leaf reaches is not allocated; nothing reads it.
+                    const uint32_t n = nb[((a >> kLeafLog2) << 2) | ((b >> kLeafLog2) << 1) | (c >> kLeafLog2)];
+                    if (n == SparseGrid::kNoLeaf) continue;
+                    f(index(a, b, c), grid.leaf(n), leafOffset(a & (kLeafDim - 1), b & (kLeafDim - 1), c & (kLeafDim - 1)));
                 }
     }
 };
@@ -214,13 +216,18 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
         }
         return b;
     };
-    auto haloVolume = [&](const Range& r) {
-        std::size_t v = 0;
-        for (int d = 1; d < 8; ++d) v += volume(part(r, d));
-        return v;
-    };
     std::vector<Range> range(P);
     std::vector<std::size_t> offset(P);
+    // The part of particle leaf i's block kept for neighbour d: none where that neighbour is not
+    // allocated (no stencil reaches it, so the block is zero there).
+    auto halo = [&](std::size_t i, int d) {
+        return grid.neighbours(leaves[i])[d] == SparseGrid::kNoLeaf ? Range{{0, 0, 0}, {0, 0, 0}} : part(range[i], d);
+    };
+    auto haloVolume = [&](std::size_t i) {
+        std::size_t v = 0;
+        for (int d = 1; d < 8; ++d) v += volume(halo(i, d));
+        return v;
+    };
     tbb::parallel_for(std::size_t(0), P, [&](std::size_t i) {
         range[i] = B::reach(species, leaves[i], grid.leaf(leaves[i]).origin, grid.dx());
     });
@@ -229,7 +236,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
         [&](const tbb::blocked_range<std::size_t>& r, std::size_t sum, bool final) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
                 if (final) offset[i] = sum;
-                sum += haloVolume(range[i]);
+                sum += haloVolume(i);
             }
             return sum;
         },
@@ -266,7 +273,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
                 }
         f4* out = halos + offset[i];
         for (int d = 1; d < 8; ++d) {
-            const Range q = part(r, d);
+            const Range q = halo(i, d);
             if (volume(q) == 0) continue;
             for (int a = q.lo[0]; a < q.hi[0]; ++a)
                 for (int b = q.lo[1]; b < q.hi[1]; ++b, out += q.hi[2] - q.lo[2])
@@ -284,10 +291,9 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
             else written = box(part(range[src[0]], 0), 0);
             for (int d = 1; d < 8; ++d) {
                 if (src[d] == SparseGrid::kNoLeaf) continue;
-                const Range& r = range[src[d]];
                 const f4* in = halos + offset[src[d]];
-                for (int e = 1; e < d; ++e) in += volume(part(r, e));
-                const Range q = part(r, d);
+                for (int e = 1; e < d; ++e) in += volume(halo(src[d], e));
+                const Range q = halo(src[d], d);
                 if (volume(q) == 0) continue;
                 const int shift[3] = {kLeafDim * (d >> 2), kLeafDim * ((d >> 1) & 1), kLeafDim * (d & 1)};
                 written.add(box(q, d));

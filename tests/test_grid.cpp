@@ -125,3 +125,27 @@ TEST(SparseGrid, NodesOutsideTheWrittenBoxesStayZeroAsSprayMoves) {
         ASSERT_NEAR(gridMass, particleMass, 1e-5 * particleMass) << "substep " << step;
     }
 }
+
+TEST(SparseGrid, ALoneParticleAllocatesOnlyTheLeavesItsStencilReaches) {
+    // The quadratic stencil covers base .. base + 2 per axis: it spills into the next leaf only from the
+    // last two node positions of a leaf. One particle in the middle of a leaf needs that leaf alone; one
+    // in a corner needs all 8 around it.
+    auto leavesFor = [](const Vec3d& x) {
+        SimulationSettings s;
+        s.dx = 0.1;
+        s.gravity = Vec3d::Zero();
+        Simulation sim(s);
+        Species<Water> w;
+        w.name = "water";
+        const int id = sim.addSpecies(std::move(w));
+        sim.addParticles(id, {x}, Vec3f::Zero(), 1e-3f, 1e-6f, 0);
+        sim.substep(1e-4);
+        EXPECT_EQ(sim.grid().leafCount(), sim.grid().allocatedLeaves());
+        return sim.grid().leafCount();
+    };
+    // Base node floor(x / dx - 0.5): x = 0.35 gives base 3 (nodes 3..5), x = 0.75 gives base 7 (7..9).
+    EXPECT_EQ(leavesFor(Vec3d(0.35, 0.35, 0.35)), 1u);
+    EXPECT_EQ(leavesFor(Vec3d(0.75, 0.35, 0.35)), 2u);
+    EXPECT_EQ(leavesFor(Vec3d(0.75, 0.75, 0.35)), 4u);
+    EXPECT_EQ(leavesFor(Vec3d(0.75, 0.75, 0.75)), 8u);
+}
