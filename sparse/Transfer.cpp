@@ -218,6 +218,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
     };
     std::vector<Range> range(P);
     std::vector<std::size_t> offset(P);
+    std::vector<std::array<std::size_t, 8>> partStart(P);  // where pass 1 put each halo part d = 1..7
     // The part of particle leaf i's block kept for neighbour d: none where that neighbour is not
     // allocated (no stencil reaches it, so the block is zero there).
     auto halo = [&](std::size_t i, int d) {
@@ -273,6 +274,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
                 }
         f4* out = halos + offset[i];
         for (int d = 1; d < 8; ++d) {
+            partStart[i][d] = std::size_t(out - halos);
             const Range q = halo(i, d);
             if (volume(q) == 0) continue;
             for (int a = q.lo[0]; a < q.hi[0]; ++a)
@@ -291,8 +293,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
             else written = box(part(range[src[0]], 0), 0);
             for (int d = 1; d < 8; ++d) {
                 if (src[d] == SparseGrid::kNoLeaf) continue;
-                const f4* in = halos + offset[src[d]];
-                for (int e = 1; e < d; ++e) in += volume(halo(src[d], e));
+                const f4* in = halos + partStart[src[d]][d];
                 const Range q = halo(src[d], d);
                 if (volume(q) == 0) continue;
                 const int shift[3] = {kLeafDim * (d >> 2), kLeafDim * ((d >> 1) & 1), kLeafDim * (d & 1)};
