@@ -51,7 +51,7 @@ int run(const std::string& scenePath, const std::string& outDir, int threads, co
     const int nThreads = threads > 0 ? threads : scene.threads > 0 ? scene.threads : int(std::thread::hardware_concurrency());
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nThreads));
     std::unique_ptr<Simulation> sim = buildSimulation(scene);
-    FrameWriter writer(scene, outDir.empty() ? scene.output.directory : outDir);
+    FrameWriter writer(scene, speciesLayout(scene), outDir.empty() ? scene.output.directory : outDir);
     const bool tty = ::isatty(STDERR_FILENO) && !quiet;
     if (!quiet) {
         std::fprintf(stderr, "mpm: %s, %d frames at %g fps, dx %g m, %d threads -> %s\n", scenePath.c_str(), range.last,

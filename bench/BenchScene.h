@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/Colliders.h"
 #include "core/Simulation.h"
 
 namespace mpm::bench {
@@ -30,21 +31,15 @@ struct BenchScene {
 /// Cube edge for spray, in cells: about four leaves' volume per particle, so most particles are alone.
 inline double sprayEdgeCells(long particles) { return std::cbrt(double(particles) * 4.0 * kLeafNodes); }
 
-template <class M>
-AnySpecies named(const char* name) {
-    Species<M> s;
-    s.name = name;
-    return s;
-}
-
-/// A species of the material with its default (thesis) parameters.
-inline AnySpecies makeSpecies(const std::string& material) {
-    if (material == "water") return named<Water>("water");
-    if (material == "jelly") return named<FixedCorotated>("jelly");
-    if (material == "rubber") return named<NeoHookean>("rubber");
-    if (material == "snow") return named<Snow>("snow");
-    if (material == "sand") return named<Sand>("sand");
-    throw std::invalid_argument("unknown material '" + material + "' (allowed: water, jelly, rubber, snow, sand)");
+/// A species of the material with its default (thesis) parameters, by the name a scene gives it.
+inline AnySpecies presetSpecies(const std::string& material) {
+    AnyMaterialParams params;
+    if (!defaultMaterialParams(material, params)) {
+        std::string known;
+        for (const std::string& n : materialSceneNames()) known += (known.empty() ? "" : ", ") + n;
+        throw std::invalid_argument("unknown material '" + material + "' (allowed: " + known + ")");
+    }
+    return makeSpecies(material, params);
 }
 
 inline float densityOf(const AnySpecies& s) {
@@ -65,7 +60,7 @@ inline std::unique_ptr<Simulation> makeBenchSimulation(const BenchScene& b) {
     s.transfer.interpolation = b.kernel;
     s.stability.energyGrowth = 0.0;  // the benchmark times the substep alone
     auto sim = std::make_unique<Simulation>(s);
-    const int id = sim->addSpecies(makeSpecies(b.material));
+    const int id = sim->addSpecies(presetSpecies(b.material));
     const double h = 0.5 * kDx;  // 8 particles per cell
     const int perBlob = int(std::cbrt(double(b.particles) / b.blobs) + 0.5);
     std::vector<Vec3d> x;
@@ -84,7 +79,7 @@ inline std::unique_ptr<Simulation> makeBenchSimulation(const BenchScene& b) {
     }
     const double vol = h * h * h;
     sim->addParticles(id, x, Vec3f::Zero(), float(vol * densityOf(sim->species()[id])), float(vol), 0);
-    sim->addCollider(std::make_unique<PlaneCollider>(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, 0.0f));
+    sim->addCollider(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, 0.0f));
     return sim;
 }
 

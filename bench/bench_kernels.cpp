@@ -11,6 +11,7 @@
 #include <tuple>
 
 #include "BenchScene.h"
+#include "core/GridUpdate.h"
 
 using namespace mpm;
 using namespace mpm::bench;
@@ -50,7 +51,7 @@ struct KernelScene {
         for (std::size_t s = 0; s < species.size(); ++s)
             std::visit([&](auto& sp) { requests.push_back(BinRequest{&sp.p.x, &destination[s], &sp.leafStart}); }, species[s]);
         grid.rebuild(requests);
-        colliders.push_back(std::make_unique<PlaneCollider>(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, 0.0f));
+        colliders.push_back(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, 0.0f));
         particlesToGrid(grid, species, transfer, dt);
         updateGridVelocities(grid, colliders, Vec3f(0, -9.81f, 0), dt, 0.0);
     }

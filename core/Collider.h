@@ -1,16 +1,15 @@
 #pragma once
 // Rigid, one-way colliders applied to grid nodes after the grid update (thesis section 5; Stomakhin et al.
-// 2013, sec. 8). A collider is a signed distance function, phi > 0 outside; planes and spheres ship here,
-// and level-set or moving colliders only need to implement signedDistance/normal/velocity.
+// 2013, sec. 8). A collider is a signed distance function of position and time, phi > 0 outside, with its
+// normal and surface velocity. The grid update hands every collider each leaf with a context of its own per
+// task, so that a collider that samples a tree (a level set) can keep an accessor there.
 #include <memory>
 #include <string>
 
 #include "core/Types.h"
+#include "sparse/LeafGeometry.h"
 
 namespace mpm {
-
-struct LeafView;
-struct NodeBox;
 
 enum class Boundary {
     Sticky,    ///< node velocity becomes the collider's
@@ -20,24 +19,32 @@ enum class Boundary {
 
 const char* boundaryName(Boundary b);
 
+/// What one task of the grid update keeps for one collider between the leaves it visits (an accessor, a
+/// cache); analytic colliders keep nothing.
+struct ColliderContext {
+    virtual ~ColliderContext() = default;
+};
+
 class Collider {
 public:
     Collider(Boundary boundary, float friction) : boundary_(boundary), friction_(friction) {}
     virtual ~Collider() = default;
 
-    virtual double signedDistance(const Vec3d& x) const = 0;
-    /// Outward unit normal (grad phi) at x.
-    virtual Vec3d normal(const Vec3d& x) const = 0;
+    virtual double signedDistance(const Vec3d& x, double t) const = 0;
+    /// Outward unit normal (grad phi) at x and time t.
+    virtual Vec3d normal(const Vec3d& x, double t) const = 0;
     /// Velocity of the collider surface at x and time t (zero for static colliders).
-    virtual Vec3d velocity(const Vec3d& /*x*/, double /*t*/) const { return Vec3d::Zero(); }
+    virtual Vec3d velocity(const Vec3d& x, double t) const = 0;
     virtual std::string describe() const = 0;
+
+    /// A context for one task; the default is none.
+    virtual std::unique_ptr<ColliderContext> makeContext() const { return nullptr; }
+    /// Applies the boundary condition at time t to every node in `box` of a leaf with phi <= 0 and nonzero mass.
+    /// A leaf whose centre lies farther from the surface than its half diagonal is skipped (phi is 1-Lipschitz).
+    virtual void applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context) const = 0;
 
     Boundary boundary() const { return boundary_; }
     float friction() const { return friction_; }
-
-    /// Applies the boundary condition to every node in the box of a leaf with phi <= 0 and nonzero mass. A leaf whose
-    /// centre lies farther from the surface than its half diagonal is skipped (phi is 1-Lipschitz).
-    void applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double time) const;
 
     /// The node response: v is the node velocity before the collision, n the outward normal, vc the
     /// collider velocity. Coulomb friction scales with the normal velocity change |v_after - v|.
@@ -46,31 +53,6 @@ public:
 private:
     Boundary boundary_;
     float friction_;
-};
-
-/// Half space below a plane: phi = n . (x - p).
-class PlaneCollider final : public Collider {
-public:
-    PlaneCollider(const Vec3d& point, const Vec3d& normal, Boundary b, float friction);
-    double signedDistance(const Vec3d& x) const override { return normal_.dot(x - point_); }
-    Vec3d normal(const Vec3d&) const override { return normal_; }
-    std::string describe() const override;
-
-private:
-    Vec3d point_, normal_;
-};
-
-/// Solid ball: phi = |x - c| - r.
-class SphereCollider final : public Collider {
-public:
-    SphereCollider(const Vec3d& centre, double radius, Boundary b, float friction);
-    double signedDistance(const Vec3d& x) const override { return (x - centre_).norm() - radius_; }
-    Vec3d normal(const Vec3d& x) const override;
-    std::string describe() const override;
-
-private:
-    Vec3d centre_;
-    double radius_;
 };
 
 }  // namespace mpm

@@ -1,5 +1,5 @@
 #pragma once
-// Per-frame diagnostics (engine issue, item 10): conservation quantities, energies, extremes, grid size.
+// Per-frame diagnostics: conservation quantities, energies, extremes, grid size (stats.csv).
 #include <cstdint>
 #include <string>
 #include <vector>

@@ -1,34 +1,25 @@
 #pragma once
-// The explicit MPM driver: species, colliders and emitters around a sparse grid, advanced substep by
-// substep (ALGORITHM.md, "One explicit step") with frames ending exactly on frame times.
+// The explicit MPM driver (docs/method.md, "One substep"): species, colliders and emitters around a sparse
+// grid, advanced substep by substep with frames ending exactly on frame times. What it holds, apart:
+//  - the model: settings, colliders and emitters, fixed for the run;
+//  - the state (core/SimState.h): where the run is, one value that a retry copies and a checkpoint writes;
+//  - the step caches: the grid, the sort permutations, the permutation buffer, rebuilt from the state;
+//  - the stability guard (core/Stability.h) and the phase timings.
+#include <cstddef>
 #include <limits>
 #include <memory>
-#include <stdexcept>
 #include <string>
-#include <cstddef>
 #include <vector>
 
 #include "core/Collider.h"
 #include "core/Diagnostics.h"
+#include "core/SimState.h"
 #include "core/Species.h"
+#include "core/Stability.h"
+#include "core/Transfer.h"
 #include "sparse/SparseGrid.h"
-#include "sparse/Transfer.h"
 
 namespace mpm {
-
-/// Blow-up detection (ALGORITHM.md, "Stability"). A check that fires stops the run with its cause, frame,
-/// substep and particle, or, with retries > 0, restarts the frame from its start with half the time step.
-struct StabilitySettings {
-    bool cellCrossing = true;   ///< a particle moving more than one cell in a substep breaks the stencil
-    /// Total energy (kinetic + stored + gravity) may not rise above its lowest value since the last emission
-    /// by more than this fraction of the largest kinetic + stored energy seen; 0 = off. Colliders are static
-    /// and dissipative, so without emission nothing does positive work.
-    double energyGrowth = 0.5;
-    /// The CFL step may not shrink by more than this factor in one substep (a crushed material or a flung
-    /// particle makes the step collapse and the run stall); 0 = off.
-    double stepCollapse = 100.0;
-    int retries = 0;            ///< restarts of a failed frame, each halving the time step; 0 = stop at once
-};
 
 struct SimulationSettings {
     double dx = 0.02;                         ///< grid spacing [m]
@@ -72,17 +63,6 @@ struct PhaseSeconds {
     double total() const { return topology + binning + p2g + grid + g2p + other; }
 };
 
-/// Grid update (thesis 3.20, 3.26, section 5): v = (mv) / m plus dt g on nodes with mass, then the
-/// colliders at time tEnd. Returns the largest node speed.
-float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders,
-                           const Vec3f& gravity, float dt, double tEnd);
-
-/// A blow-up or invalid state found during a substep; the message names frame, substep, particle and field.
-class SimulationError : public std::runtime_error {
-public:
-    using std::runtime_error::runtime_error;
-};
-
 class Simulation {
 public:
     explicit Simulation(const SimulationSettings& settings);
@@ -109,51 +89,44 @@ public:
     void refreshSpeedBound();
     FrameStats measure() const;
 
-    std::vector<AnySpecies>& species() { return species_; }
-    const std::vector<AnySpecies>& species() const { return species_; }
+    /// Where the run is, whole (checkpoints write it; see core/SimState.h).
+    const SimState& state() const { return state_; }
+    /// Continues from a state this simulation's model produced (same species, in the same order).
+    void restore(SimState state);
+
+    std::vector<AnySpecies>& species() { return state_.species; }
+    const std::vector<AnySpecies>& species() const { return state_.species; }
+    const std::vector<std::unique_ptr<Collider>>& colliders() const { return colliders_; }
+    const std::vector<Emitter>& emitters() const { return emitters_; }
     const SparseGrid& grid() const { return grid_; }
-    double time() const { return time_; }
-    int frame() const { return frame_; }
-    long long substepCount() const { return substeps_; }
-    int retryCount() const { return retriesTotal_; }
+    double time() const { return state_.time; }
+    int frame() const { return state_.frame; }
+    long long substepCount() const { return state_.substeps; }
+    int retryCount() const { return state_.retries; }
     std::size_t particleCount() const;
     float kernelInertiaScale() const;
     const PhaseSeconds& phaseSeconds() const { return phases_; }
     void resetPhaseSeconds() { phases_ = PhaseSeconds(); }
 
 private:
-    struct Snapshot;
     int runFrameSubsteps();
-    void checkEnergy(const FrameStats& st);
-    void resetEnergyReference(const FrameStats& st);
-    [[noreturn]] void fail(const std::string& cause, int species, std::size_t particle, double dt) const;
-    std::pair<int, std::size_t> fastestParticle() const;
-    std::pair<int, std::size_t> stiffestParticle() const;
-    float volumeRatioOf(int species, std::size_t i) const;
     void bin();
     float updateGrid(float dt);
     template <class S> void permute(S& species, const std::vector<uint32_t>& destination);
 
+    // The model.
     SimulationSettings settings_;
-    SparseGrid grid_;
-    std::vector<AnySpecies> species_;
     std::vector<std::unique_ptr<Collider>> colliders_;
     std::vector<Emitter> emitters_;
-    std::vector<std::vector<uint32_t>> destination_;
-    std::vector<float> minStiffnessKey_;
-    float maxSpeed_ = 0.0f;
-    double time_ = 0.0;
-    int frame_ = 0;
-    int emittedFrame_ = -1;
-    long long substeps_ = 0;
-    int32_t nextId_ = 0;
-    double dtScale_ = 1.0;          ///< halved on each retry of the current frame
-    int retriesTotal_ = 0;
+    // The state.
+    SimState state_;
+    // Step caches, rebuilt from the state every substep.
+    SparseGrid grid_;
+    std::vector<std::vector<uint32_t>> destination_;  ///< per species: sorted slot of each particle
+    std::vector<std::byte> scratch_;                  ///< permutation buffer, shared by every particle array
+    // Policy and timings.
+    StabilityGuard guard_;
     PhaseSeconds phases_;
-    bool energyReferenceSet_ = false;
-    double energyMin_ = 0.0;        ///< lowest total energy since the last emission
-    double energyScale_ = 0.0;      ///< largest kinetic + stored energy seen
-    std::vector<std::byte> scratch_;  ///< permutation buffer, shared by every particle array
 };
 
 }  // namespace mpm

@@ -22,6 +22,7 @@ struct ParticleArrays {
     std::vector<uint16_t> set;    ///< index of the particle set that emitted it
 
     template <class F> void forEachArray(F&& f) { f(x); f(v); f(C); f(mass); f(volume0); f(id); f(set); }
+    template <class F> void forEachArray(F&& f) const { f(x); f(v); f(C); f(mass); f(volume0); f(id); f(set); }
     std::size_t size() const { return x.size(); }
 };
 
@@ -33,22 +34,58 @@ struct Species {
     typename M::Params params;
     ParticleArrays p;
     typename M::State state;
-    /// Particles of grid leaf l are [leafStart[l], leafStart[l+1]) after binning.
+    /// Particles of grid leaf l are [leafStart[l], leafStart[l+1]) after binning (a step cache: binning
+    /// rebuilds it before every use).
     std::vector<uint32_t> leafStart;
 
     template <class F> void forEachArray(F&& f) { p.forEachArray(f); state.forEachArray(f); }
+    template <class F> void forEachArray(F&& f) const { p.forEachArray(f); state.forEachArray(f); }
     std::size_t size() const { return p.size(); }
 };
 
-/// The closed set of species types, one per material in materials/Materials.h.
+/// The closed set of species types, one per material in materials/Materials.h, and of their parameters.
 template <class List> struct SpeciesVariantOf;
-template <class... Ms> struct SpeciesVariantOf<MaterialList<Ms...>> { using type = std::variant<Species<Ms>...>; };
+template <class... Ms> struct SpeciesVariantOf<MaterialList<Ms...>> {
+    using type = std::variant<Species<Ms>...>;
+    using params = std::variant<typename Ms::Params...>;
+};
 using AnySpecies = SpeciesVariantOf<AllMaterials>::type;
+/// Parameters of any one material; the alternative says which.
+using AnyMaterialParams = SpeciesVariantOf<AllMaterials>::params;
 
 /// Common attributes of any species, without knowing its material.
 inline ParticleArrays& particlesOf(AnySpecies& s) { return std::visit([](auto& sp) -> ParticleArrays& { return sp.p; }, s); }
 inline const ParticleArrays& particlesOf(const AnySpecies& s) {
     return std::visit([](const auto& sp) -> const ParticleArrays& { return sp.p; }, s);
 }
+
+/// An empty species of the material that `params` belong to.
+inline AnySpecies makeSpecies(const std::string& name, const AnyMaterialParams& params) {
+    return std::visit(
+        [&]<class P>(const P& p) -> AnySpecies {
+            AnySpecies out;
+            forEachMaterial(AllMaterials{}, [&]<class M>() {
+                if constexpr (std::is_same_v<typename M::Params, P>) out = Species<M>{name, p, {}, {}, {}};
+            });
+            return out;
+        },
+        params);
+}
+
+/// Calls f.template operator()<M>(params) with M the model the parameters belong to.
+template <class Params, class F>
+void visitMaterialParams(Params& params, F&& f) {
+    forEachMaterial(AllMaterials{}, [&]<class M>() {
+        if (auto* p = std::get_if<typename M::Params>(&params)) f.template operator()<M>(*p);
+    });
+}
+
+/// Scene names of the materials, in list order (the order of the `material` index written with the points).
+const std::vector<std::string>& materialSceneNames();
+/// Index in that list of the model a species or a parameter set belongs to.
+inline int materialIndex(const AnySpecies& s) { return int(s.index()); }
+inline int materialIndex(const AnyMaterialParams& p) { return int(p.index()); }
+/// Default parameters of the material called `sceneName`, or nothing when no material has that name.
+bool defaultMaterialParams(const std::string& sceneName, AnyMaterialParams& out);
 
 }  // namespace mpm

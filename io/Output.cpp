@@ -1,19 +1,46 @@
 #include "io/Output.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <regex>
 
 #include "io/AtomicFile.h"
 #include "io/PlyWriter.h"
-#include "io/VdbWriter.h"
 
 namespace fs = std::filesystem;
 
 namespace mpm {
 
-FrameWriter::FrameWriter(const SceneDesc& scene, const std::string& directory) : scene_(scene), dir_(directory) {
+namespace {
+/// The surface grids: one of all species, or one per material or per set.
+std::vector<SurfaceGroup> surfaceGroups(const std::string& grouping, const SpeciesLayout& layout) {
+    std::vector<SurfaceGroup> groups;
+    const std::size_t species = layout.setOfSpecies.size();
+    if (grouping == "all") {
+        SurfaceGroup g{"surface", {}};
+        for (std::size_t s = 0; s < species; ++s) g.species.push_back(int(s));
+        return {g};
+    }
+    for (std::size_t s = 0; s < species; ++s) {
+        const std::string key = grouping == "set" ? layout.setNames[layout.setOfSpecies[s]]
+                                                  : materialSceneNames()[layout.materialOfSpecies[s]];
+        auto it = std::find_if(groups.begin(), groups.end(), [&](const SurfaceGroup& g) { return g.gridName == "surface_" + key; });
+        if (it == groups.end()) groups.push_back(SurfaceGroup{"surface_" + key, {int(s)}});
+        else it->species.push_back(int(s));
+    }
+    return groups;
+}
+}  // namespace
+
+FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory)
+    : name_(scene.name), output_(scene.output), layout_(layout), surfaces_(surfaceGroups(scene.output.surfaceGroup, layout)),
+      dir_(directory) {
+    // The surface resolves the particle spacing of the first set; the sphere radius is a multiple of it.
+    const double particlesPerCell = scene.sets.empty() ? 8.0 : scene.sets.front().particlesPerCell;
+    particleSpacing_ = scene.settings.dx / std::cbrt(particlesPerCell);
     fs::create_directories(dir_);
     // Files of an earlier run of this scene: <scene>_NNNN.vdb, <scene>_points_NNNN.vdb, <scene>_NNNN.ply, ...
     const std::regex old("^" + std::regex_replace(scene.name, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
@@ -31,7 +58,7 @@ FrameWriter::FrameWriter(const SceneDesc& scene, const std::string& directory) :
 std::string FrameWriter::framePath(int frame, const char* suffix, const char* ext) const {
     char buf[32];
     std::snprintf(buf, sizeof(buf), "%04d", frame);
-    return dir_ + "/" + scene_.name + "_" + suffix + buf + ext;
+    return dir_ + "/" + name_ + "_" + suffix + buf + ext;
 }
 
 void FrameWriter::recordStats(const FrameStats& stats) {
@@ -41,8 +68,7 @@ void FrameWriter::recordStats(const FrameStats& stats) {
 
 void FrameWriter::writeFrame(int frame, const Simulation& sim, const FrameStats& stats) {
     const auto start = std::chrono::steady_clock::now();
-    const OutputDesc& o = scene_.output;
-    const std::vector<AnySpecies>& species = sim.species();
+    const OutputDesc& o = output_;
     VdbFrameRequest r;
     r.volumePath = framePath(frame);
     if (o.splitFiles) r.pointsPath = framePath(frame, "points_");
@@ -51,35 +77,14 @@ void FrameWriter::writeFrame(int frame, const Simulation& sim, const FrameStats&
     r.density = o.density;
     r.velocity = o.velocity;
     r.pointVoxelSize = sim.settings().dx;
-    // The surface resolves the particle spacing; the sphere radius is a multiple of it.
-    double particlesPerCell = 8.0;
-    if (!scene_.sets.empty()) particlesPerCell = scene_.sets.front().particlesPerCell;
-    const double spacing = sim.settings().dx / std::cbrt(particlesPerCell);
-    r.surfaceVoxelSize = spacing;
-    r.surfaceRadius = o.surfaceRadius * spacing;
-    for (std::size_t s = 0; s < species.size(); ++s) {
-        const std::string& mat = scene_.materialNames[s];
-        int index = 0;
-        for (std::size_t m = 0; m < materialPresetNames().size(); ++m)
-            if (materialPresetNames()[m] == mat) index = int(m);
-        r.materialOfSpecies.push_back(index);
-    }
-    r.materialNames = materialPresetNames();
-    for (const ParticleSetDesc& d : scene_.sets) r.setNames.push_back(d.name);
-    if (o.surfaceGroup == "all") {
-        SurfaceGroup g{"surface", {}};
-        for (std::size_t s = 0; s < species.size(); ++s) g.species.push_back(int(s));
-        r.surfaces.push_back(g);
-    } else {
-        for (std::size_t s = 0; s < species.size(); ++s) {
-            const std::string key = o.surfaceGroup == "set" ? scene_.sets[s].name : scene_.materialNames[s];
-            auto it = std::find_if(r.surfaces.begin(), r.surfaces.end(), [&](const SurfaceGroup& g) { return g.gridName == "surface_" + key; });
-            if (it == r.surfaces.end()) r.surfaces.push_back(SurfaceGroup{"surface_" + key, {int(s)}});
-            else it->species.push_back(int(s));
-        }
-    }
-    if (o.points || o.surface || o.density || o.velocity) writeVdbFrame(r, species);
-    if (o.ply) writePly(framePath(frame, "", ".ply"), species);
+    r.surfaceVoxelSize = particleSpacing_;
+    r.surfaceRadius = o.surfaceRadius * particleSpacing_;
+    r.surfaces = surfaces_;
+    r.materialNames = materialSceneNames();
+    r.setNames = layout_.setNames;
+    const PointCloud cloud = gatherPoints(sim.species(), layout_.materialOfSpecies);
+    if (o.points || o.surface || o.density || o.velocity) writeVdbFrame(r, cloud);
+    if (o.ply) writePly(framePath(frame, "", ".ply"), cloud);
     lastWrite_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     recordStats(stats);
 }

@@ -6,15 +6,17 @@
 
 #include "core/Diagnostics.h"
 #include "core/Simulation.h"
-#include "io/Scene.h"
+#include "io/SceneBuilder.h"
+#include "io/SceneDesc.h"
+#include "io/VdbWriter.h"
 
 namespace mpm {
 
 class FrameWriter {
 public:
     /// Creates the directory. Frames of an earlier run of the same scene are removed (and reported in
-    /// removedFiles()), so old and new frames never mix.
-    FrameWriter(const SceneDesc& scene, const std::string& directory);
+    /// removedFiles()), so old and new frames never mix. Keeps its own copy of what it needs of the scene.
+    FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory);
 
     /// Writes frame files for the current state and appends the stats row.
     void writeFrame(int frame, const Simulation& sim, const FrameStats& stats);
@@ -27,7 +29,11 @@ public:
     double lastWriteSeconds() const { return lastWrite_; }
 
 private:
-    const SceneDesc& scene_;
+    std::string name_;
+    OutputDesc output_;
+    SpeciesLayout layout_;
+    std::vector<SurfaceGroup> surfaces_;
+    double particleSpacing_ = 0.0;  ///< what the surface resolves
     std::string dir_;
     std::string csv_;
     int removed_ = 0;

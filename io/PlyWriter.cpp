@@ -8,15 +8,10 @@
 
 namespace mpm {
 
-void writePly(const std::string& path, const std::vector<AnySpecies>& species, const std::vector<int>& which) {
-    std::vector<int> list = which;
-    if (list.empty())
-        for (std::size_t s = 0; s < species.size(); ++s) list.push_back(int(s));
-    std::size_t n = 0;
-    for (int s : list) n += particlesOf(species[s]).size();
+void writePly(const std::string& path, const PointCloud& f) {
     writeAtomically(path, [&](const std::string& tmp) {
         std::ofstream out(tmp, std::ios::binary);
-        out << "ply\nformat binary_little_endian 1.0\ncomment sparse-mpm particles, SI units\nelement vertex " << n
+        out << "ply\nformat binary_little_endian 1.0\ncomment sparse-mpm particles, SI units\nelement vertex " << f.size()
             << "\nproperty float x\nproperty float y\nproperty float z\nproperty float vx\nproperty float vy\n"
                "property float vz\nproperty int id\nend_header\n";
         struct Record {
@@ -24,19 +19,15 @@ void writePly(const std::string& path, const std::vector<AnySpecies>& species, c
             int32_t id;
         };
         static_assert(sizeof(Record) == 28, "PLY record must be packed");
-        std::vector<Record> buf;
-        for (int s : list) {
-            const ParticleArrays& P = particlesOf(species[s]);
-            buf.resize(P.size());
-            for (std::size_t i = 0; i < P.size(); ++i) {
-                for (int a = 0; a < 3; ++a) {
-                    buf[i].x[a] = float(P.x[i][a]);
-                    buf[i].v[a] = P.v[i][a];
-                }
-                buf[i].id = P.id[i];
+        std::vector<Record> buf(f.size());
+        for (std::size_t i = 0; i < f.size(); ++i) {
+            for (int a = 0; a < 3; ++a) {
+                buf[i].x[a] = float(f.x[i][a]);
+                buf[i].v[a] = f.v[i][a];
             }
-            out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize(buf.size() * sizeof(Record)));
+            buf[i].id = f.id[i];
         }
+        out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize(buf.size() * sizeof(Record)));
         out.flush();
         if (!out) throw std::runtime_error(path + ": write failed");
     });

@@ -1,13 +1,12 @@
 #pragma once
 // Binary little-endian PLY point clouds with velocity and id, which Blender imports as vertices.
 #include <string>
-#include <vector>
 
-#include "core/Species.h"
+#include "io/PointCloud.h"
 
 namespace mpm {
 
-/// Writes the particles of the given species (all when the list is empty) to path, atomically.
-void writePly(const std::string& path, const std::vector<AnySpecies>& species, const std::vector<int>& which = {});
+/// Writes the points to path, atomically.
+void writePly(const std::string& path, const PointCloud& points);
 
 }  // namespace mpm

@@ -8,19 +8,10 @@
 namespace mpm {
 
 namespace {
-void bounds(const ShapeDesc& s, Vec3d& lo, Vec3d& hi) {
-    if (s.kind == ShapeDesc::Kind::Box) {
-        lo = s.min;
-        hi = s.max;
-    } else {
-        lo = s.centre - Vec3d::Constant(s.radius);
-        hi = s.centre + Vec3d::Constant(s.radius);
-    }
-}
-
-std::vector<Vec3d> jitteredGrid(const ShapeDesc& shape, double spacing, double jitterFraction, unsigned seed) {
+template <class Shape>
+std::vector<Vec3d> jitteredGrid(const Shape& shape, double spacing, double jitterFraction, unsigned seed) {
     Vec3d lo, hi;
-    bounds(shape, lo, hi);
+    shape.bounds(lo, hi);
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> jitter(-jitterFraction * spacing, jitterFraction * spacing);
     std::vector<Vec3d> out;
@@ -33,11 +24,11 @@ std::vector<Vec3d> jitteredGrid(const ShapeDesc& shape, double spacing, double j
             }
     return out;
 }
-}  // namespace
 
-std::vector<Vec3d> poissonDisk(const ShapeDesc& shape, double r, unsigned seed) {
+template <class Shape>
+std::vector<Vec3d> poissonDiskIn(const Shape& shape, double r, unsigned seed) {
     Vec3d lo, hi;
-    bounds(shape, lo, hi);
+    shape.bounds(lo, hi);
     // Background grid of cell r / sqrt(3): each cell holds at most one sample.
     const double cell = r / std::sqrt(3.0);
     const Vec3i dims = ((hi - lo) / cell).array().ceil().cast<int>().max(1);
@@ -94,8 +85,8 @@ std::vector<Vec3d> poissonDisk(const ShapeDesc& shape, double r, unsigned seed) 
     return samples;
 }
 
-std::vector<Vec3d> sampleShape(const ShapeDesc& shape, double dx, double particlesPerCell, long long count,
-                               Sampling method, unsigned seed) {
+template <class Shape>
+std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCell, long long count, Sampling method, unsigned seed) {
     const double perVolume = count > 0 ? double(count) / shape.volume() : particlesPerCell / (dx * dx * dx);
     std::vector<Vec3d> pts;
     if (method != Sampling::Poisson) {
@@ -106,8 +97,8 @@ std::vector<Vec3d> sampleShape(const ShapeDesc& shape, double dx, double particl
         while (count > 0 && (long long)pts.size() < count) pts = jitteredGrid(shape, spacing *= 0.97, jitter, seed);
     } else {
         double r = std::cbrt(1.0 / (kPoissonPacking * perVolume));
-        pts = poissonDisk(shape, r, seed);
-        while (count > 0 && (long long)pts.size() < count) pts = poissonDisk(shape, r *= 0.95, seed);
+        pts = poissonDiskIn(shape, r, seed);
+        while (count > 0 && (long long)pts.size() < count) pts = poissonDiskIn(shape, r *= 0.95, seed);
     }
     if (count > 0 && (long long)pts.size() > count) {
         std::mt19937 rng(seed ^ 0x9e3779b9u);
@@ -115,6 +106,21 @@ std::vector<Vec3d> sampleShape(const ShapeDesc& shape, double dx, double particl
         pts.resize(std::size_t(count));
     }
     return pts;
+}
+
+}  // namespace
+
+std::vector<Vec3d> poissonDisk(const SetShape& shape, double r, unsigned seed) {
+    return std::visit([&](const auto& s) { return poissonDiskIn(s, r, seed); }, shape);
+}
+
+std::vector<Vec3d> sampleShape(const SetShape& shape, double dx, double particlesPerCell, long long count, Sampling method,
+                               unsigned seed) {
+    return std::visit([&](const auto& s) { return sampleIn(s, dx, particlesPerCell, count, method, seed); }, shape);
+}
+
+double shapeVolume(const SetShape& shape) {
+    return std::visit([](const auto& s) { return s.volume(); }, shape);
 }
 
 }  // namespace mpm

@@ -7,6 +7,7 @@
 #include <openvdb/tools/LevelSetUtil.h>
 
 #include <stdexcept>
+#include <type_traits>
 
 #include "io/AtomicFile.h"
 
@@ -16,39 +17,34 @@ namespace {
 
 using openvdb::points::PointDataGrid;
 
-/// Positions and attributes of a subset of species, gathered into flat arrays.
-struct Flat {
-    std::vector<openvdb::Vec3d> x;
-    std::vector<openvdb::Vec3s> v;
-    std::vector<int32_t> id, material, set;
+/// One of the cloud's arrays seen through OpenVDB's point-array interface (that of PointAttributeVector),
+/// read in place rather than copied into OpenVDB's vector types.
+template <class VdbT, class T>
+struct ArrayView {
+    using PosType = VdbT;
+    using value_type = VdbT;
+    const std::vector<T>& data;
+    static VdbT convert(const T& a) {
+        if constexpr (std::is_arithmetic_v<T>) return VdbT(a);
+        else return VdbT(a[0], a[1], a[2]);
+    }
+    std::size_t size() const { return data.size(); }
+    void getPos(std::size_t n, VdbT& xyz) const { xyz = convert(data[n]); }
+    void get(VdbT& value, std::size_t n) const { value = convert(data[n]); }
+    void get(VdbT& value, std::size_t n, openvdb::Index) const { value = convert(data[n]); }
 };
 
-Flat gather(const std::vector<AnySpecies>& species, const std::vector<int>& which, const std::vector<int>& materialOf) {
-    Flat f;
-    for (int s : which) {
-        const ParticleArrays& P = particlesOf(species[s]);
-        for (std::size_t i = 0; i < P.size(); ++i) {
-            f.x.emplace_back(P.x[i][0], P.x[i][1], P.x[i][2]);
-            f.v.emplace_back(P.v[i][0], P.v[i][1], P.v[i][2]);
-            f.id.push_back(P.id[i]);
-            f.material.push_back(materialOf.empty() ? 0 : materialOf[s]);
-            f.set.push_back(P.set[i]);
-        }
-    }
-    return f;
-}
-
-template <class T, class Codec = openvdb::points::NullCodec>
+template <class VdbT, class Codec = openvdb::points::NullCodec, class T>
 void addAttribute(PointDataGrid& grid, const openvdb::tools::PointIndexGrid& index, const char* name, const std::vector<T>& values) {
-    openvdb::points::appendAttribute<T, Codec>(grid.tree(), name);
-    openvdb::points::PointAttributeVector<T> wrapper(values);
-    openvdb::points::populateAttribute<openvdb::points::PointDataTree, openvdb::tools::PointIndexTree>(grid.tree(), index.tree(), name, wrapper);
+    openvdb::points::appendAttribute<VdbT, Codec>(grid.tree(), name);
+    const ArrayView<VdbT, T> view{values};
+    openvdb::points::populateAttribute<openvdb::points::PointDataTree, openvdb::tools::PointIndexTree>(grid.tree(), index.tree(), name, view);
 }
 
 /// Points with P (16-bit fixed point, as Houdini writes them) and, when full, v, id, material and set.
-PointDataGrid::Ptr makePoints(const Flat& f, double voxelSize, bool full) {
+PointDataGrid::Ptr makePoints(const PointCloud& f, double voxelSize, bool full) {
     const auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
-    const openvdb::points::PointAttributeVector<openvdb::Vec3d> positions(f.x);
+    const ArrayView<openvdb::Vec3d, Vec3d> positions{f.x};
     auto index = openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(positions, *xform);
     auto grid = openvdb::points::createPointDataGrid<openvdb::points::FixedPointCodec<false>, PointDataGrid>(*index, positions, *xform);
     if (full) {
@@ -79,15 +75,15 @@ void writeFile(const std::string& path, const openvdb::GridPtrVec& grids) {
 }
 
 /// Mean particle velocity per surface voxel.
-openvdb::Vec3SGrid::Ptr velocityGrid(const Flat& f, double voxelSize) {
+openvdb::Vec3SGrid::Ptr velocityGrid(const PointCloud& f, double voxelSize) {
     auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
     grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));
     openvdb::FloatGrid counts(0.0f);
     auto acc = grid->getAccessor();
     auto cnt = counts.getAccessor();
     for (std::size_t i = 0; i < f.x.size(); ++i) {
-        const openvdb::Coord c = grid->transform().worldToIndexNodeCentered(f.x[i]);
-        acc.setValue(c, acc.getValue(c) + f.v[i]);
+        const openvdb::Coord c = grid->transform().worldToIndexNodeCentered(openvdb::Vec3d(f.x[i][0], f.x[i][1], f.x[i][2]));
+        acc.setValue(c, acc.getValue(c) + openvdb::Vec3s(f.v[i][0], f.v[i][1], f.v[i][2]));
         cnt.setValue(c, cnt.getValue(c) + 1.0f);
     }
     for (auto it = grid->beginValueOn(); it; ++it) it.setValue(*it / cnt.getValue(it.getCoord()));
@@ -98,11 +94,9 @@ openvdb::Vec3SGrid::Ptr velocityGrid(const Flat& f, double voxelSize) {
 
 }  // namespace
 
-std::size_t writeVdbFrame(const VdbFrameRequest& r, const std::vector<AnySpecies>& species) {
+std::size_t writeVdbFrame(const VdbFrameRequest& r, const PointCloud& flat) {
     openvdb::initialize();
-    std::vector<int> all;
-    for (std::size_t s = 0; s < species.size(); ++s) all.push_back(int(s));
-    const Flat flat = gather(species, all, r.materialOfSpecies);
+    const std::size_t speciesCount = flat.speciesStart.size() - 1;
     openvdb::GridPtrVec volumes, pointGrids;
     if (r.points) {
         auto points = makePoints(flat, r.pointVoxelSize, true);
@@ -113,12 +107,13 @@ std::size_t writeVdbFrame(const VdbFrameRequest& r, const std::vector<AnySpecies
     }
     if (r.surface || r.density) {
         for (const SurfaceGroup& g : r.surfaces) {
-            const Flat part = g.species == all ? Flat() : gather(species, g.species, r.materialOfSpecies);
-            const Flat& src = g.species == all ? flat : part;
+            const bool all = g.species.size() == speciesCount;  // groups list distinct species
+            const PointCloud part = all ? PointCloud() : flat.subset(g.species);
+            const PointCloud& src = all ? flat : part;
             if (src.x.empty()) continue;
             auto pts = makePoints(src, r.pointVoxelSize, false);
             auto xform = openvdb::math::Transform::createLinearTransform(r.surfaceVoxelSize);
-            // Zhu and Bridson 2005 smoothed spheres: blended surfaces without a post filter (BUILD-NOTES).
+            // Zhu and Bridson 2005 smoothed spheres: blended surfaces without a post filter (docs/output.md).
             auto sdf = openvdb::points::rasterizeSmoothSpheres(*pts, r.surfaceRadius, 2.0 * r.surfaceRadius,
                                                                openvdb::LEVEL_SET_HALF_WIDTH, xform);
             sdf->setGridClass(openvdb::GRID_LEVEL_SET);

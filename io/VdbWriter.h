@@ -6,13 +6,13 @@
 #include <string>
 #include <vector>
 
-#include "core/Species.h"
+#include "io/PointCloud.h"
 
 namespace mpm {
 
 struct SurfaceGroup {
     std::string gridName;      ///< "surface", or "surface_<material or set>"
-    std::vector<int> species;  ///< species that make up this surface
+    std::vector<int> species;  ///< species that make up this surface (distinct)
 };
 
 struct VdbFrameRequest {
@@ -23,12 +23,11 @@ struct VdbFrameRequest {
     double surfaceVoxelSize = 0.01;
     double surfaceRadius = 0.01;     ///< world-space sphere radius
     std::vector<SurfaceGroup> surfaces;
-    std::vector<int> materialOfSpecies;  ///< index into materialNames
-    std::vector<std::string> materialNames, setNames;
+    std::vector<std::string> materialNames, setNames;  ///< what the cloud's material and set indices mean
 };
 
 /// Writes the requested grids atomically. Returns the number of particles written.
-std::size_t writeVdbFrame(const VdbFrameRequest& request, const std::vector<AnySpecies>& species);
+std::size_t writeVdbFrame(const VdbFrameRequest& request, const PointCloud& points);
 
 /// Reads back the "points" grid of a file: positions, velocities and ids (for tests and tools).
 struct PointsReadBack {

@@ -5,15 +5,22 @@
 //   tau = P F^T = 2 mu (F - R) F^T + lambda (J - 1) J I.
 #include <vector>
 
+#include "materials/Elastic.h"
 #include "materials/SvdBatch.h"
 
 namespace mpm {
 
 struct FixedCorotated {
     static constexpr const char* kName = "fixed_corotated";
+    static constexpr const char* kSceneName = "jelly";
+    static constexpr const char* kSummary = "fixed corotated elasticity (Stomakhin et al. 2012; thesis 4.6-4.8)";
 
-    using Params = ElasticParams;
+    struct Params : ElasticParams {};  // its own type, so that a parameter set names its model
     using State = DeformationGradientState;
+
+    template <class V>
+    static void keys(V& v, Params& p) { elasticKeys(v, p.density, p.mu, p.lambda, kThesisElastic); }
+    static void scaleStiffness(Params& p, double lambdaScale, double muScale) { scaleLame(p.mu, p.lambda, lambdaScale, muScale); }
 
     template <class T>
     static T psi(T mu, T lambda, const Mat3T<T>& F) {

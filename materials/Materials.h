@@ -1,21 +1,32 @@
 #pragma once
-// The closed list of constitutive models. A material is a struct with this shape (see Water.h):
+// The closed list of constitutive models, and the contract each one meets (checked by MaterialModel below
+// with a readable static_assert). A material is a struct with this shape (see Water.h):
 // @code
 // struct Model {
-//     static constexpr const char* kName;
-//     struct Params { ... };                               // constant per species, SI units
-//     struct State  { vectors...; forEachArray(f); appendRest(n) or appendRest(n, params); };   // per-particle, only what it needs
-//     static Mat3f  kirchhoff(const Params&, const State&, size_t i);   // tau = P F^T
+//     static constexpr const char* kName;        // the model ("fixed_corotated")
+//     static constexpr const char* kSceneName;   // what a scene calls it ("jelly"); unique in the list
+//     static constexpr const char* kSummary;     // one line for `mpm validate --explain`, with its paper
+//     struct Params { ... };                     // constant per species, SI units; initial values are the defaults
+//     struct State  { vectors...; forEachArray(f) (and const); appendRest(n) or appendRest(n, params); };
+//     template <class V> static void keys(V&, Params&);          // its scene keys (materials/Parameters.h)
+//     static void   scaleStiffness(Params&, double lambdaScale, double muScale);  // a set's Lame scales
+//     static Mat3f  kirchhoff(const Params&, const State&, size_t i);              // tau = P F^T
 //     static void   updateDeformation(const Params&, State&, size_t i, const Mat3f& gradV, float dt); // + return map
-//     static double energyDensity(const Params&, const State&, size_t i);  // per reference volume
-//     static float  volumeRatio(const State&, size_t i);                    // J, for diagnostics
-//     static float  stiffnessKey(const State&, size_t i);                   // its minimum sets ...
-//     static float  waveSpeed(const Params&, float minStiffnessKey);        // ... the fastest wave speed
+//     static double energyDensity(const Params&, const State&, size_t i);           // per reference volume
+//     static float  volumeRatio(const State&, size_t i);                            // J, for diagnostics
+//     static float  stiffnessKey(const State&, size_t i);                           // its minimum sets ...
+//     static float  waveSpeed(const Params&, float minStiffnessKey);                // ... the fastest wave speed
 //     // optional, for n <= simd::kLanes consecutive particles (the SVD-based models run their SVDs in SIMD lanes):
 //     static void   kirchhoffBatch(const Params&, const State&, size_t first, int n, Mat3f* tau);
 //     static void   updateDeformationBatch(const Params&, State&, size_t first, int n, const Mat3f* gradV, float dt);
 // };
 // @endcode
+// A new model is a new header and one entry in AllMaterials. A build may append models of its own without
+// touching this file (the test suite adds linear elasticity this way): MPM_EXTRA_MATERIALS_HEADER names the
+// header and MPM_EXTRA_MATERIALS lists the types, each preceded by a comma.
+#include <concepts>
+#include <cstddef>
+#include <string_view>
 #include <type_traits>
 
 #include "materials/FixedCorotated.h"
@@ -24,10 +35,90 @@
 #include "materials/Snow.h"
 #include "materials/Water.h"
 
+#ifdef MPM_EXTRA_MATERIALS_HEADER
+#include MPM_EXTRA_MATERIALS_HEADER
+#endif
+#ifndef MPM_EXTRA_MATERIALS
+#define MPM_EXTRA_MATERIALS
+#endif
+
 namespace mpm {
 
-template <class... Ms> struct MaterialList {};
-using AllMaterials = MaterialList<Water, FixedCorotated, NeoHookean, Snow, Sand>;
+namespace material_detail {
+/// Stands for the f of State::forEachArray(f): any per-particle vector.
+struct ArrayVisitor {
+    template <class T> void operator()(const std::vector<T>&) const {}
+};
+}  // namespace material_detail
+
+template <class M>
+concept MaterialModel = requires(const typename M::Params& cp, typename M::Params& p, const typename M::State& cs,
+                                 typename M::State& s, std::size_t i, const Mat3f& gradV, float dt, KeyVisitorArchetype& v,
+                                 material_detail::ArrayVisitor f) {
+    { M::kName } -> std::convertible_to<const char*>;
+    { M::kSceneName } -> std::convertible_to<const char*>;
+    { M::kSummary } -> std::convertible_to<const char*>;
+    M::keys(v, p);
+    M::scaleStiffness(p, 1.0, 1.0);
+    { M::kirchhoff(cp, cs, i) } -> std::convertible_to<Mat3f>;
+    M::updateDeformation(cp, s, i, gradV, dt);
+    { M::energyDensity(cp, cs, i) } -> std::convertible_to<double>;
+    { M::volumeRatio(cs, i) } -> std::convertible_to<float>;
+    { M::stiffnessKey(cs, i) } -> std::convertible_to<float>;
+    { M::waveSpeed(cp, 1.0f) } -> std::convertible_to<float>;
+    s.forEachArray(f);
+    cs.forEachArray(f);
+    requires requires { s.appendRest(i); } || requires { s.appendRest(i, cp); };
+};
+
+template <class... Ms>
+struct MaterialList {
+    static constexpr std::size_t size = sizeof...(Ms);
+};
+
+/// Checks one model against the contract above, with a message that says where the contract is written.
+template <class M>
+constexpr bool checkMaterial() {
+    static_assert(MaterialModel<M>,
+                  "this type does not meet the material contract: see the @code block at the top of materials/Materials.h "
+                  "(kName, kSceneName, kSummary, Params, State, keys, scaleStiffness, kirchhoff, updateDeformation, "
+                  "energyDensity, volumeRatio, stiffnessKey, waveSpeed)");
+    return true;
+}
+
+template <class... Ms>
+constexpr bool checkMaterials(MaterialList<Ms...>) {
+    return (checkMaterial<Ms>() && ...);
+}
+
+/// Scene names must be unique: a scene picks its model by that name.
+template <class... Ms>
+constexpr bool sceneNamesUnique(MaterialList<Ms...>) {
+    constexpr std::string_view names[] = {Ms::kSceneName...};
+    for (std::size_t a = 0; a < sizeof...(Ms); ++a)
+        for (std::size_t b = a + 1; b < sizeof...(Ms); ++b)
+            if (names[a] == names[b]) return false;
+    return true;
+}
+
+/// Parameter types must differ between models too: a scene's parameter set says which model it is for.
+template <class T, class... Ts>
+constexpr std::size_t countOf = (std::size_t(std::is_same_v<T, Ts>) + ... + 0);
+template <class... Ms>
+constexpr bool paramsUnique(MaterialList<Ms...>) {
+    return ((countOf<typename Ms::Params, typename Ms::Params...> == 1) && ...);
+}
+
+using AllMaterials = MaterialList<Water, FixedCorotated, NeoHookean, Snow, Sand MPM_EXTRA_MATERIALS>;
+static_assert(checkMaterials(AllMaterials{}));
+static_assert(sceneNamesUnique(AllMaterials{}), "two materials share a kSceneName");
+static_assert(paramsUnique(AllMaterials{}), "two materials share a Params type (derive one of its own)");
+
+/// Calls f.template operator()<M>() for every model in the list, in order.
+template <class... Ms, class F>
+void forEachMaterial(MaterialList<Ms...>, F&& f) {
+    (f.template operator()<Ms>(), ...);
+}
 
 /// tau of particles first .. first + n - 1 (n <= simd::kLanes): batched where the model has it.
 template <class M>

@@ -9,15 +9,24 @@
 #include <limits>
 #include <vector>
 
+#include "materials/Elastic.h"
 #include "materials/Svd.h"
 
 namespace mpm {
 
 struct NeoHookean {
     static constexpr const char* kName = "neo_hookean";
+    static constexpr const char* kSceneName = "rubber";
+    static constexpr const char* kSummary =
+        "compressible neo-Hookean elasticity (Bonet and Wood 2008; thesis 4.3, 4.5); undefined for inverted elements (J <= 0), "
+        "where a run stops naming the particle";
 
-    using Params = ElasticParams;
+    struct Params : ElasticParams {};  // its own type, so that a parameter set names its model
     using State = DeformationGradientState;
+
+    template <class V>
+    static void keys(V& v, Params& p) { elasticKeys(v, p.density, p.mu, p.lambda, kThesisElastic); }
+    static void scaleStiffness(Params& p, double lambdaScale, double muScale) { scaleLame(p.mu, p.lambda, lambdaScale, muScale); }
 
     template <class T>
     static T psi(T mu, T lambda, const Mat3T<T>& F) {

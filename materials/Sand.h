@@ -8,18 +8,23 @@
 #include <cmath>
 #include <vector>
 
+#include "materials/Elastic.h"
 #include "materials/SvdBatch.h"
 
 namespace mpm {
 
 struct Sand {
     static constexpr const char* kName = "sand";
+    static constexpr const char* kSceneName = "sand";
+    static constexpr const char* kSummary = "Drucker-Prager sand with Hencky elasticity (Klar et al. 2016; thesis 4.12-4.18)";
     static constexpr int kDim = 3;
+    /// Thesis Fig. 6.1.
+    static constexpr YoungPoisson kElastic{3.537e7, 0.2};
 
     struct Params {
         float density = 2200.0f;  ///< thesis Fig. 6.1
-        float mu = Lame::fromYoung(3.537e7, 0.2).mu;
-        float lambda = Lame::fromYoung(3.537e7, 0.2).lambda;
+        float mu = Lame::fromYoung(kElastic.E, kElastic.nu).mu;
+        float lambda = Lame::fromYoung(kElastic.E, kElastic.nu).lambda;
         // Hardening phi(q) = h0 + (h1 q - h3) exp(-h2 q), in degrees (Klar et al. 2016).
         float h0 = 35.0f, h1 = 9.0f, h2 = 0.2f, h3 = 10.0f;
         bool volumeCorrection = true;
@@ -31,6 +36,7 @@ struct Sand {
         std::vector<float> alpha;   ///< cone coefficient from the friction angle
         std::vector<float> logVc;   ///< volume correction: log volume to add back
         template <class Fn> void forEachArray(Fn&& f) { f(Fe); f(q); f(alpha); f(logVc); }
+        template <class Fn> void forEachArray(Fn&& f) const { f(Fe); f(q); f(alpha); f(logVc); }
         void appendRest(std::size_t n, const Params& m) {
             Fe.resize(Fe.size() + n, Mat3f::Identity());
             q.resize(q.size() + n, 0.0f);
@@ -38,6 +44,20 @@ struct Sand {
             logVc.resize(logVc.size() + n, 0.0f);
         }
     };
+
+    template <class V>
+    static void keys(V& v, Params& p) {
+        elasticKeys(v, p.density, p.mu, p.lambda, kElastic);
+        v.number(Key{.name = "h0", .help = "hardening h0 (friction angle phi = h0 + (h1 q - h3) exp(-h2 q))", .lo = 0.0, .hi = 89.0,
+                     .unit = "degrees"},
+                 p.h0);
+        v.number(Key{.name = "h1", .help = "hardening h1", .lo = -89.0, .hi = 89.0, .unit = "degrees"}, p.h1);
+        v.number(Key{.name = "h2", .help = "hardening h2", .lo = 0.0, .hi = 1e3}, p.h2);
+        v.number(Key{.name = "h3", .help = "hardening h3", .lo = -89.0, .hi = 89.0, .unit = "degrees"}, p.h3);
+        v.flag(Key{.name = "volume_correction", .help = "add back the volume lost to tip projections (Tampubolon et al. 2017)"},
+               p.volumeCorrection);
+    }
+    static void scaleStiffness(Params& p, double lambdaScale, double muScale) { scaleLame(p.mu, p.lambda, lambdaScale, muScale); }
 
     /// alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi)), phi from the hardening law.
     static float frictionAngleDegrees(const Params& m, float q) { return m.h0 + (m.h1 * q - m.h3) * std::exp(-m.h2 * q); }

@@ -13,11 +13,13 @@ namespace mpm {
 
 struct Snow {
     static constexpr const char* kName = "snow";
+    static constexpr const char* kSceneName = "snow";
+    static constexpr const char* kSummary = "Stomakhin et al. 2013 snow: fixed corotated on F_E, hardening, clamped singular values";
 
     struct Params {
-        float density = 400.0f;  ///< thesis Fig. 6.1
-        float mu = Lame::fromYoung(1.4e5, 0.2).mu;
-        float lambda = Lame::fromYoung(1.4e5, 0.2).lambda;
+        float density = kThesisElasticDensity;  ///< thesis Fig. 6.1
+        float mu = Lame::fromYoung(kThesisElastic.E, kThesisElastic.nu).mu;
+        float lambda = Lame::fromYoung(kThesisElastic.E, kThesisElastic.nu).lambda;
         float thetaC = 0.025f;   ///< critical compression
         float thetaS = 0.0075f;  ///< critical stretch
         float xi = 10.0f;        ///< hardening coefficient
@@ -27,11 +29,21 @@ struct Snow {
         std::vector<Mat3f> Fe;
         std::vector<float> Jp;
         template <class Fn> void forEachArray(Fn&& f) { f(Fe); f(Jp); }
+        template <class Fn> void forEachArray(Fn&& f) const { f(Fe); f(Jp); }
         void appendRest(std::size_t n) {
             Fe.resize(Fe.size() + n, Mat3f::Identity());
             Jp.resize(Jp.size() + n, 1.0f);
         }
     };
+
+    template <class V>
+    static void keys(V& v, Params& p) {
+        elasticKeys(v, p.density, p.mu, p.lambda, kThesisElastic);
+        v.number(Key{.name = "theta_c", .help = "critical compression theta_c", .lo = 0.0, .hi = 1.0}, p.thetaC);
+        v.number(Key{.name = "theta_s", .help = "critical stretch theta_s", .lo = 0.0, .hi = 10.0}, p.thetaS);
+        v.number(Key{.name = "xi", .help = "hardening coefficient xi", .lo = 0.0, .hi = 100.0}, p.xi);
+    }
+    static void scaleStiffness(Params& p, double lambdaScale, double muScale) { scaleLame(p.mu, p.lambda, lambdaScale, muScale); }
 
     static float hardening(const Params& m, float Jp) { return std::exp(m.xi * (1.0f - Jp)); }
 

@@ -12,11 +12,15 @@
 #include <vector>
 
 #include "core/Types.h"
+#include "materials/Parameters.h"
 
 namespace mpm {
 
 struct Water {
     static constexpr const char* kName = "water";
+    static constexpr const char* kSceneName = "water";
+    static constexpr const char* kSummary =
+        "weakly compressible water, Tait-like equation of state (thesis 4.1-4.2; Tampubolon et al. 2017)";
 
     struct Params {
         float density = 1000.0f;     ///< rho0 [kg/m^3]
@@ -28,8 +32,25 @@ struct Water {
     struct State {
         std::vector<float> J;  ///< volume ratio det F
         template <class F> void forEachArray(F&& f) { f(J); }
+        template <class F> void forEachArray(F&& f) const { f(J); }
         void appendRest(std::size_t n) { J.resize(J.size() + n, 1.0f); }
     };
+
+    /// Scene keys. The defaults keep the thesis's k = 50 at rho = 1 scaled with the density, so that the
+    /// sound speed sqrt(k gamma / rho) = 14.1 m/s is the thesis's.
+    template <class V>
+    static void keys(V& v, Params& p) {
+        v.number(Key{.name = "density", .help = "rest density rho0", .lo = kTiny, .hi = kHuge, .unit = "kg/m^3"}, p.density);
+        v.number(Key{.name = "bulk_modulus", .help = "bulk modulus k", .lo = 0.0, .hi = kHuge, .unit = "Pa"}, p.bulkModulus);
+        v.number(Key{.name = "gamma", .help = "stiffening exponent of the equation of state", .lo = 1.0, .hi = 20.0}, p.gamma);
+        v.flag(Key{.name = "tension",
+                   .help = "hold negative pressure (the thesis's EOS: free-surface water turns cohesive); false clamps J to at most 1"},
+               p.tension);
+    }
+    /// A set's lambda_scale scales the bulk modulus, water's only Lame-like parameter; mu_scale has nothing to scale.
+    static void scaleStiffness(Params& p, double lambdaScale, double /*muScale*/) {
+        p.bulkModulus = float(double(p.bulkModulus) * lambdaScale);
+    }
 
     static float pressure(const Params& m, float J) { return m.bulkModulus * (powNegative(J, m.gamma) - 1.0f); }
 

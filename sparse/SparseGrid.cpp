@@ -8,19 +8,17 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/parallel_scan.h>
 
 #include <algorithm>
-#include <functional>
 #include <limits>
+
+#include "sparse/LeafParallel.h"
 
 namespace mpm {
 
 namespace {
 /// Particles per task when scanning positions; large enough to amortise a tree accessor.
 constexpr std::size_t kScanGrain = 4096;
-/// Leaves per task in the per-leaf loops (a few tree lookups or chunk sums each).
-constexpr std::size_t kLeafGrain = 256;
 /// Upper bound on counting-sort chunks: the histogram is chunks x leaves integers.
 constexpr std::size_t kMaxSortChunks = 64;
 constexpr std::size_t kMinSortChunkSize = 2048;
@@ -33,18 +31,22 @@ using MomentumTree = openvdb::tree::Tree4<openvdb::Vec3s, 4, 3, 3>::Type;
 using LeafIndexTree = openvdb::tree::Tree4<int32_t, 3, 3, 3>::Type;
 using LeafMaskTree = openvdb::tree::Tree4<openvdb::ValueMask, 3, 3, 3>::Type;
 
+openvdb::Coord toCoord(const Vec3i& c) { return openvdb::Coord(c[0], c[1], c[2]); }
+
 /// Coordinate of the leaf holding a particle's stencil base node (one voxel per leaf in the coarse trees).
-openvdb::Coord leafCoordOf(const SparseGrid& grid, const Vec3d& x) {
-    const Vec3i b = grid.baseNode(x);
-    return openvdb::Coord(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2);
+openvdb::Coord leafCoordOf(const SparseGrid& grid, const Vec3d& x) { return toCoord(leafOfNode(grid.baseNode(x))); }
+
+/// The leaf at leaf coordinate c + neighbour d.
+openvdb::Coord neighbourCoord(const openvdb::Coord& c, int d) {
+    return c.offsetBy(neighbourStep(d, 0), neighbourStep(d, 1), neighbourStep(d, 2));
 }
 
-/// For each of the 8 spill patterns s (bit 2: +x, bit 1: +y, bit 0: +z), the neighbours d = (dx, dy, dz) in
-/// {0,1}^3 that a stencil with that pattern reaches: every d inside s.
-constexpr std::array<uint8_t, 8> reachedNeighbours() {
-    std::array<uint8_t, 8> m{};
-    for (int spill = 0; spill < 8; ++spill)
-        for (int d = 0; d < 8; ++d)
+/// For each spill pattern s (the neighbour that holds a stencil's far corner), the neighbours that stencil
+/// reaches: every d whose steps lie inside s's.
+constexpr std::array<uint8_t, kNeighbours> reachedNeighbours() {
+    std::array<uint8_t, kNeighbours> m{};
+    for (int spill = 0; spill < kNeighbours; ++spill)
+        for (int d = 0; d < kNeighbours; ++d)
             if ((d & ~spill) == 0) m[spill] |= uint8_t(1u << d);
     return m;
 }
@@ -60,7 +62,7 @@ struct LeafCollector {
     LeafCollector(const std::vector<Vec3d>& xs, const SparseGrid& g, int w) : x(xs), grid(g), width(w) {}
     LeafCollector(LeafCollector& o, tbb::split) : x(o.x), grid(o.grid), width(o.width) {}
     void operator()(const tbb::blocked_range<std::size_t>& r) {
-        static constexpr std::array<uint8_t, 8> kReached = reachedNeighbours();
+        static constexpr std::array<uint8_t, kNeighbours> kReached = reachedNeighbours();
         constexpr unsigned kAllNeighbours = 0xFF;
         openvdb::tree::ValueAccessor<LeafMaskTree> own(particles), all(reached);
         // Particles are sorted by leaf from the last substep: a run of one leaf is entered once, with the
@@ -68,19 +70,14 @@ struct LeafCollector {
         std::size_t i = r.begin();
         Vec3i b = i < r.end() ? grid.baseNode(x[i]) : Vec3i::Zero();
         while (i < r.end()) {
-            const Vec3i leaf(b[0] >> kLeafLog2, b[1] >> kLeafLog2, b[2] >> kLeafLog2);
+            const Vec3i leaf = leafOfNode(b);
             unsigned mask = 0;
             do {
-                if (mask != kAllNeighbours) {  // in bulk a run saturates after a few particles
-                    const int spill = (((b[0] & (kLeafDim - 1)) + width - 1) >> kLeafLog2) << 2 |
-                                      (((b[1] & (kLeafDim - 1)) + width - 1) >> kLeafLog2) << 1 |
-                                      (((b[2] & (kLeafDim - 1)) + width - 1) >> kLeafLog2);
-                    mask |= kReached[spill];
-                }
+                if (mask != kAllNeighbours) mask |= kReached[farCornerNeighbour(b, width)];  // in bulk a run saturates early
                 if (++i == r.end()) break;
                 b = grid.baseNode(x[i]);
-            } while ((b[0] >> kLeafLog2) == leaf[0] && (b[1] >> kLeafLog2) == leaf[1] && (b[2] >> kLeafLog2) == leaf[2]);
-            enter(own, all, openvdb::Coord(leaf[0], leaf[1], leaf[2]), mask);
+            } while (nodeInLeaf(b, leaf));
+            enter(own, all, toCoord(leaf), mask);
         }
     }
     /// Marks leaf c as holding particles and the neighbours in mask as reached.
@@ -88,8 +85,8 @@ struct LeafCollector {
                       const openvdb::Coord& c, unsigned mask) {
         if (mask == 0) return;
         own.setValueOn(c);
-        for (int d = 0; d < 8; ++d)
-            if (mask >> d & 1u) all.setValueOn(c.offsetBy(d >> 2, (d >> 1) & 1, d & 1));
+        for (int d = 0; d < kNeighbours; ++d)
+            if (mask >> d & 1u) all.setValueOn(neighbourCoord(c, d));
     }
     void join(LeafCollector& o) {
         particles.topologyUnion(o.particles);
@@ -115,13 +112,6 @@ SparseGrid::~SparseGrid() = default;
 SparseGrid::SparseGrid(SparseGrid&&) noexcept = default;
 SparseGrid& SparseGrid::operator=(SparseGrid&&) noexcept = default;
 
-void SparseGrid::configure(double dx, double baseShift, int stencilWidth) {
-    dx_ = dx;
-    invDx_ = 1.0 / dx;
-    baseShift_ = baseShift;
-    stencilWidth_ = stencilWidth;
-}
-
 void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
     Trees& t = *trees_;
 
@@ -131,7 +121,7 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
     t.particleLeaves.clear();
     t.gridLeaves.clear();
     for (const BinRequest& r : requests) {
-        LeafCollector collect(*r.positions, *this, stencilWidth_);
+        LeafCollector collect(*r.positions, *this, geometry_.width);
         tbb::parallel_reduce(tbb::blocked_range<std::size_t>(0, r.positions->size(), kScanGrain), collect);
         t.particleLeaves.topologyUnion(collect.particles);
         t.gridLeaves.topologyUnion(collect.reached);
@@ -188,31 +178,28 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
     neighbours_.resize(L);
     sources_.resize(L);
     written_.resize(L);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L, kLeafGrain), [&](const tbb::blocked_range<std::size_t>& range) {
+    forEachLeafRange(L, LeafGrain::Bookkeeping, [&](std::size_t begin, std::size_t end) {
         openvdb::tree::ValueAccessor<const LeafIndexTree> before(*t.previousIndex);
-        for (std::size_t l = range.begin(); l < range.end(); ++l) {
+        for (std::size_t l = begin; l < end; ++l) {
             sources_[l].fill(kNoLeaf);
-            const Vec3i c = leaves_[l].origin / kLeafDim;
-            const int32_t old = before.getValue(openvdb::Coord(c[0], c[1], c[2]));
+            const int32_t old = before.getValue(toCoord(leafOfNode(leaves_[l].origin)));
             written_[l] = old >= 0 ? writtenBefore_[old] : NodeBox{};
         }
     });
     // The tree lookups, the costly part, in parallel (read-only accessors, one per task). Each (leaf, d)
     // of the inverse has one source, so the tasks write disjoint entries.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, particleLeaves_.size(), kLeafGrain),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                          openvdb::tree::ValueAccessor<const LeafIndexTree> idx(*t.leafIndex);
-                          for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                              const uint32_t l = particleLeaves_[i];
-                              const Vec3i c = leaves_[l].origin / kLeafDim;
-                              for (int d = 0; d < 8; ++d) {
-                                  const uint32_t n = uint32_t(
-                                      idx.getValue(openvdb::Coord(c[0] + (d >> 2), c[1] + ((d >> 1) & 1), c[2] + (d & 1))));
-                                  neighbours_[l][d] = n;  // kNoLeaf where no stencil of this leaf reaches
-                                  if (n != kNoLeaf) sources_[n][d] = uint32_t(i);
-                              }
-                          }
-                      });
+    forEachLeafRange(particleLeaves_.size(), LeafGrain::Bookkeeping, [&](std::size_t begin, std::size_t end) {
+        openvdb::tree::ValueAccessor<const LeafIndexTree> idx(*t.leafIndex);
+        for (std::size_t i = begin; i < end; ++i) {
+            const uint32_t l = particleLeaves_[i];
+            const openvdb::Coord c = toCoord(leafOfNode(leaves_[l].origin));
+            for (int d = 0; d < kNeighbours; ++d) {
+                const uint32_t n = uint32_t(idx.getValue(neighbourCoord(c, d)));
+                neighbours_[l][d] = n;  // kNoLeaf where no stencil of this leaf reaches
+                if (n != kNoLeaf) sources_[n][d] = uint32_t(i);
+            }
+        }
+    });
 }
 
 void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
@@ -251,31 +238,19 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
         // leaf's chunks from its start.
         std::vector<uint32_t>& start = *r.leafStart;
         leafCount_.resize(L);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L, kLeafGrain), [&](const tbb::blocked_range<std::size_t>& range) {
-            for (std::size_t l = range.begin(); l < range.end(); ++l) {
-                uint32_t n = 0;
-                for (std::size_t c = 0; c < chunks; ++c) n += histogram_[c * L + l];
-                leafCount_[l] = n;
-            }
+        forEachLeaf(L, LeafGrain::Bookkeeping, [&](std::size_t l) {
+            uint32_t n = 0;
+            for (std::size_t c = 0; c < chunks; ++c) n += histogram_[c * L + l];
+            leafCount_[l] = n;
         });
-        start[L] = tbb::parallel_scan(
-            tbb::blocked_range<std::size_t>(0, L, kLeafGrain), uint32_t(0),
-            [&](const tbb::blocked_range<std::size_t>& range, uint32_t sum, bool final) {
-                for (std::size_t l = range.begin(); l < range.end(); ++l) {
-                    if (final) start[l] = sum;
-                    sum += leafCount_[l];
-                }
-                return sum;
-            },
-            std::plus<uint32_t>());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L, kLeafGrain), [&](const tbb::blocked_range<std::size_t>& range) {
-            for (std::size_t l = range.begin(); l < range.end(); ++l) {
-                uint32_t running = start[l];
-                for (std::size_t c = 0; c < chunks; ++c) {
-                    const uint32_t n = histogram_[c * L + l];
-                    histogram_[c * L + l] = running;
-                    running += n;
-                }
+        start[L] = prefixSumOverLeaves<uint32_t>(
+            L, [&](std::size_t l) { return leafCount_[l]; }, [&](std::size_t l, uint32_t sum) { start[l] = sum; });
+        forEachLeaf(L, LeafGrain::Bookkeeping, [&](std::size_t l) {
+            uint32_t running = start[l];
+            for (std::size_t c = 0; c < chunks; ++c) {
+                const uint32_t n = histogram_[c * L + l];
+                histogram_[c * L + l] = running;
+                running += n;
             }
         });
         tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
@@ -290,8 +265,8 @@ std::size_t SparseGrid::memoryBytes() const {
     const Trees& t = *trees_;
     return std::size_t(t.mass.memUsage() + t.momentum.memUsage() + t.leafIndex->memUsage() + t.particleLeaves.memUsage() +
                        t.gridLeaves.memUsage()) +
-           leaves_.capacity() * sizeof(LeafView) + neighbours_.capacity() * sizeof(std::array<uint32_t, 8>) +
-           sources_.capacity() * sizeof(std::array<uint32_t, 8>) + transferScratch_.capacity() * sizeof(float) +
+           leaves_.capacity() * sizeof(LeafView) + neighbours_.capacity() * sizeof(std::array<uint32_t, kNeighbours>) +
+           sources_.capacity() * sizeof(std::array<uint32_t, kNeighbours>) + transferScratch_.capacity() * sizeof(float) +
            (written_.capacity() + writtenBefore_.capacity()) * sizeof(NodeBox) + std::size_t(t.previousIndex->memUsage()) +
            histogram_.capacity() * sizeof(uint32_t) +
            leafCount_.capacity() * sizeof(uint32_t);

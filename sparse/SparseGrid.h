@@ -2,63 +2,18 @@
 // The background grid: nodes live in the 8x8x8 leaves of two OpenVDB trees (mass: float; momentum, then
 // velocity: Vec3s) that share one topology. A leaf exists only where some particle's stencil reaches and
 // is released when none does, so the domain is unbounded and memory follows the occupied volume.
-// OpenVDB stays inside SparseGrid.cpp: this header exposes raw leaf buffers only.
-#include <algorithm>
+// OpenVDB stays inside SparseGrid.cpp: this header exposes raw leaf buffers only. The grid knows positions
+// and nodes, never materials or species: binning sorts index arrays that the caller applies.
 #include <array>
-#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
 
-#include "core/Types.h"
+#include "sparse/LeafGeometry.h"
 
 namespace mpm {
 
-/// Edge of a leaf in nodes, and its node count (OpenVDB's LeafNode<T, 3>).
-inline constexpr int kLeafDim = 8;
-inline constexpr int kLeafLog2 = 3;
-inline constexpr int kLeafNodes = kLeafDim * kLeafDim * kLeafDim;
-
-/// Offset of node (x, y, z), each in [0, 8), inside a leaf buffer (OpenVDB's x-major order).
-inline int leafOffset(int x, int y, int z) { return (x << (2 * kLeafLog2)) | (y << kLeafLog2) | z; }
-
-/// floor(t) as an int without a libm call (the portable x86-64 baseline has no SSE4.1 round instruction);
-/// exact for |t| < 2^31, which bounds the grid anyway.
-inline int floorToInt(double t) {
-    const int i = int(t);  // truncates towards zero
-    return i - (t < double(i));
-}
-
-/// Raw view of one leaf: its buffers and the integer coordinate of its first node.
-struct LeafView {
-    float* mass = nullptr;
-    float* momentum = nullptr;  ///< 3 floats per node; holds velocity after the grid update
-    Vec3i origin = Vec3i::Zero();
-};
-
-/// A box of a leaf's nodes, [lo, hi) per axis in leaf-local coordinates 0..8; empty when lo >= hi on an axis.
-struct NodeBox {
-    int8_t lo[3] = {kLeafDim, kLeafDim, kLeafDim};
-    int8_t hi[3] = {0, 0, 0};
-    bool empty() const { return lo[0] >= hi[0] || lo[1] >= hi[1] || lo[2] >= hi[2]; }
-    /// Grows this box to hold b too.
-    void add(const NodeBox& b) {
-        if (b.empty()) return;
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], b.lo[a]);
-            hi[a] = std::max(hi[a], b.hi[a]);
-        }
-    }
-    /// Calls f(node offset) for every node in the box, the innermost (z) runs contiguous in memory.
-    template <class F>
-    void forEach(F&& f) const {
-        for (int x = lo[0]; x < hi[0]; ++x)
-            for (int y = lo[1]; y < hi[1]; ++y)
-                for (int z = lo[2]; z < hi[2]; ++z) f(leafOffset(x, y, z));
-    }
-};
-
-/// What binning needs to know about one species, and what it hands back.
+/// What binning needs to know about one group of particles (a species), and what it hands back.
 struct BinRequest {
     const std::vector<Vec3d>* positions = nullptr;  ///< in: particle positions
     std::vector<uint32_t>* destination = nullptr;   ///< out: sorted slot of each particle
@@ -75,8 +30,9 @@ public:
     SparseGrid& operator=(SparseGrid&&) noexcept;
 
     /// Sets the spacing and the stencil: base node = floor(x / dx - baseShift), stencil width nodes per axis.
-    void configure(double dx, double baseShift, int stencilWidth);
-    double dx() const { return dx_; }
+    void configure(double dx, double baseShift, int stencilWidth) { geometry_ = StencilGeometry(dx, baseShift, stencilWidth); }
+    double dx() const { return geometry_.dx; }
+    const StencilGeometry& geometry() const { return geometry_; }
 
     /// Bins all particles by the leaf holding their stencil's base node, allocates the leaves their
     /// stencils reach (own leaf plus the +x/+y/+z neighbours they spill into), releases the rest, and returns, for every
@@ -94,13 +50,13 @@ public:
     const LeafView& leaf(std::size_t i) const { return leaves_[i]; }
     /// All leaves holding particles, in leaf order.
     const std::vector<uint32_t>& particleLeaves() const { return particleLeaves_; }
-    /// The 8 leaves at leaf coordinate + {0,1}^3 of a particle leaf, index (dx*4 + dy*2 + dz); kNoLeaf for a
-    /// neighbour that none of its particles' stencils reaches (it is not allocated).
-    const std::array<uint32_t, 8>& neighbours(std::size_t leafIndex) const { return neighbours_[leafIndex]; }
+    /// The 8 leaves at leaf coordinate + {0,1}^3 of a particle leaf (numbered as in LeafGeometry.h); kNoLeaf
+    /// for a neighbour that none of its particles' stencils reaches (it is not allocated).
+    const std::array<uint32_t, kNeighbours>& neighbours(std::size_t leafIndex) const { return neighbours_[leafIndex]; }
     /// The inverse: for any leaf, entry d is the position in particleLeaves() of the particle leaf whose
     /// neighbours()[d] it is (the one at leaf coordinate - offset d), or kNoLeaf.
     static constexpr uint32_t kNoLeaf = ~0u;
-    const std::array<uint32_t, 8>& sources(std::size_t leafIndex) const { return sources_[leafIndex]; }
+    const std::array<uint32_t, kNeighbours>& sources(std::size_t leafIndex) const { return sources_[leafIndex]; }
     /// The nodes of leaf i that P2G wrote (the grid update and G2P touch no others); every node outside
     /// is zero. A leaf that lives on keeps its box through updateTopology, so that the next P2G zeroes only
     /// that box: a lone particle then costs its stencil, not the 8 leaves (4096 nodes) the stencil touches.
@@ -115,20 +71,16 @@ public:
     std::size_t allocatedLeaves() const;
 
     /// Base node of a particle's stencil.
-    Vec3i baseNode(const Vec3d& x) const {
-        return Vec3i(floorToInt(x[0] * invDx_ - baseShift_), floorToInt(x[1] * invDx_ - baseShift_),
-                     floorToInt(x[2] * invDx_ - baseShift_));
-    }
+    Vec3i baseNode(const Vec3d& x) const { return geometry_.baseNode(x); }
 
 private:
     struct Trees;
     std::unique_ptr<Trees> trees_;
-    double dx_ = 1.0, invDx_ = 1.0, baseShift_ = 0.5;
-    int stencilWidth_ = 3;
+    StencilGeometry geometry_;
     std::vector<LeafView> leaves_;
     std::vector<uint32_t> particleLeaves_;
-    std::vector<std::array<uint32_t, 8>> neighbours_;
-    std::vector<std::array<uint32_t, 8>> sources_;
+    std::vector<std::array<uint32_t, kNeighbours>> neighbours_;
+    std::vector<std::array<uint32_t, kNeighbours>> sources_;
     std::vector<NodeBox> written_, writtenBefore_;
     std::vector<float> transferScratch_;
     std::vector<uint32_t> histogram_;

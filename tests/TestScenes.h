@@ -2,6 +2,7 @@
 // Small scene builders shared by the tests.
 #include <vector>
 
+#include "core/Colliders.h"
 #include "core/Simulation.h"
 
 namespace mpm::test {

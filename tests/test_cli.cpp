@@ -45,6 +45,14 @@ TEST(Cli, ValidateShippedScenesAndBadInput) {
     EXPECT_EQ(runMpm("validate --explain").code, 0);
 }
 
+TEST(Cli, SceneFormatReferenceIsTheExplainOutput) {
+    // docs/scene-format.md is generated from the key declarations the reader walks; it must not go stale.
+    const Result r = runMpm("validate --explain");
+    std::ifstream in(std::string(MPM_SOURCE_DIR) + "/docs/scene-format.md");
+    const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(r.output, doc) << "docs/scene-format.md is stale: regenerate it with `mpm validate --explain > docs/scene-format.md`";
+}
+
 TEST(Cli, RunWritesFramesAndStats) {
     const std::string scene = sceneFile("tiny.json", R"({
       "simulation": { "frames": 2, "dx": 0.05, "substeps": 2 },

@@ -31,12 +31,12 @@ TEST(ColliderResponse, CoulombFriction) {
 }
 
 TEST(ColliderGeometry, SignedDistances) {
-    const PlaneCollider plane(Vec3d(0, 1, 0), Vec3d(0, 2, 0), Boundary::Slip, 0.0f);
-    EXPECT_DOUBLE_EQ(plane.signedDistance(Vec3d(5, 3, 1)), 2.0);
-    EXPECT_DOUBLE_EQ(plane.signedDistance(Vec3d(5, 0.5, 1)), -0.5);
-    const SphereCollider ball(Vec3d(1, 0, 0), 0.5, Boundary::Sticky, 0.0f);
-    EXPECT_DOUBLE_EQ(ball.signedDistance(Vec3d(1, 2, 0)), 1.5);
-    EXPECT_TRUE(ball.normal(Vec3d(1, 2, 0)).isApprox(Vec3d::UnitY()));
+    const auto plane = planeCollider(Vec3d(0, 1, 0), Vec3d(0, 2, 0), Boundary::Slip, 0.0f);
+    EXPECT_DOUBLE_EQ(plane->signedDistance(Vec3d(5, 3, 1), 0.0), 2.0);
+    EXPECT_DOUBLE_EQ(plane->signedDistance(Vec3d(5, 0.5, 1), 0.0), -0.5);
+    const auto ball = sphereCollider(Vec3d(1, 0, 0), 0.5, Boundary::Sticky, 0.0f);
+    EXPECT_DOUBLE_EQ(ball->signedDistance(Vec3d(1, 2, 0), 0.0), 1.5);
+    EXPECT_TRUE(ball->normal(Vec3d(1, 2, 0), 0.0).isApprox(Vec3d::UnitY()));
 }
 
 namespace {
@@ -52,7 +52,7 @@ PlaneRun runOnPlane(Boundary boundary, float friction, const Vec3f& v0, int step
     s.dx = 0.05;
     Simulation sim(s);
     addWaterBlock(sim, Vec3d(0, 0.0, 0), Vec3d(0.4, 0.3, 0.4), v0);
-    sim.addCollider(std::make_unique<PlaneCollider>(Vec3d::Zero(), Vec3d::UnitY(), boundary, friction));
+    sim.addCollider(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), boundary, friction));
     PlaneRun out;
     out.start = sim.measure();
     for (int n = 0; n < steps; ++n) {

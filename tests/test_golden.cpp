@@ -108,6 +108,9 @@ const GoldenScene kScenes[] = {
      1, 0, 0x205c31d9e78044a3ull},
 };
 
+/// gtest prints the scene's name, not its bytes.
+void PrintTo(const GoldenScene& g, std::ostream* os) { *os << g.name; }
+
 }  // namespace
 
 class Golden : public ::testing::TestWithParam<GoldenScene> {};

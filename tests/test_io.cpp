@@ -91,26 +91,24 @@ TEST(SceneFile, EveryInvalidFieldIsNamed) {
 }
 
 TEST(Sampling, PoissonDiskMeetsCountSpacingAndShape) {
-    ShapeDesc ball;
-    ball.kind = ShapeDesc::Kind::Sphere;
-    ball.centre = Vec3d(1, 2, 3);
-    ball.radius = 0.2;
+    const Sphere sphere{Vec3d(1, 2, 3), 0.2};
+    const SetShape ball = sphere;
     const double r = 0.02;
     const auto pts = poissonDisk(ball, r, 5);
     ASSERT_GT(pts.size(), 500u);
-    for (const Vec3d& p : pts) EXPECT_TRUE(ball.contains(p));
+    for (const Vec3d& p : pts) EXPECT_TRUE(sphere.contains(p));
     double minDist = 1e9;
     for (std::size_t i = 0; i < pts.size(); ++i)
         for (std::size_t j = i + 1; j < pts.size(); ++j) minDist = std::min(minDist, (pts[i] - pts[j]).norm());
     EXPECT_GE(minDist, r * (1 - 1e-9));
     // Density target: particles_per_cell within 15% (Bridson's packing is not exact).
     const auto dense = sampleShape(ball, 0.02, 8.0, 0, Sampling::Poisson, 3);
-    EXPECT_NEAR(double(dense.size()) / (ball.volume() / (0.02 * 0.02 * 0.02)), 8.0, 1.2);
+    EXPECT_NEAR(double(dense.size()) / (sphere.volume() / (0.02 * 0.02 * 0.02)), 8.0, 1.2);
     // An exact count, for both methods.
     EXPECT_EQ(sampleShape(ball, 0.02, 8.0, 1234, Sampling::Poisson, 3).size(), 1234u);
     const auto grid = sampleShape(ball, 0.02, 8.0, 777, Sampling::Grid, 3);
     EXPECT_EQ(grid.size(), 777u);
-    for (const Vec3d& p : grid) EXPECT_TRUE(ball.contains(p));
+    for (const Vec3d& p : grid) EXPECT_TRUE(sphere.contains(p));
 }
 
 TEST(Emission, HappensOnTheRightFrames) {
@@ -145,7 +143,7 @@ TEST(Output, FrameReadsBackWithSameParticles) {
     sim->emitDue();
     sim->advanceFrame();
     sim->advanceFrame();
-    FrameWriter writer(scene, dir + "/frames");
+    FrameWriter writer(scene, speciesLayout(scene), dir + "/frames");
     writer.writeFrame(2, *sim, sim->measure());
     const PointsReadBack back = readVdbPoints(writer.framePath(2, "points_"));
     std::map<int32_t, std::pair<Vec3d, Vec3f>> truth;
@@ -193,7 +191,7 @@ TEST(Output, RerunRemovesOldFramesOfTheScene) {
     std::ofstream(dir + "/f/rr_0007.vdb") << "stale";
     std::ofstream(dir + "/f/rr_points_0007.vdb") << "stale";
     std::ofstream(dir + "/f/other_0007.vdb") << "keep";
-    FrameWriter writer(scene, dir + "/f");
+    FrameWriter writer(scene, speciesLayout(scene), dir + "/f");
     EXPECT_EQ(writer.removedFiles(), 2);
     EXPECT_FALSE(fs::exists(dir + "/f/rr_0007.vdb"));
     EXPECT_TRUE(fs::exists(dir + "/f/other_0007.vdb"));

@@ -29,7 +29,7 @@ TEST(Jelly, DroppedCubeBouncesAndKeepsItsVolume) {
     s.dx = 0.05;
     Simulation sim(s);
     addJellyBlock(sim, Vec3d(0, 0.2, 0), Vec3d(0.25, 0.45, 0.25), Vec3f(0.0f, -2.0f, 0.0f));
-    sim.addCollider(std::make_unique<PlaneCollider>(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Separate, 0.0f));
+    sim.addCollider(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Separate, 0.0f));
     double maxUp = -1e9, minJ = 1e9;
     while (sim.time() < 0.6) {
         sim.substep(s.targetDt());
@@ -47,7 +47,7 @@ TEST(Jelly, SlidingBlockDeceleratesAtMuG) {
     Simulation sim(s);
     const float mu = 0.3f;
     addJellyBlock(sim, Vec3d(0, 0, 0), Vec3d(0.3, 0.1, 0.3), Vec3f(2.0f, 0.0f, 0.0f));
-    sim.addCollider(std::make_unique<PlaneCollider>(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, mu));
+    sim.addCollider(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, mu));
     auto vx = [&] { const FrameStats st = sim.measure(); return st.momentum[0] / st.mass; };
     while (sim.time() < 0.05) sim.substep(s.targetDt());
     const double t0 = sim.time(), v0 = vx();

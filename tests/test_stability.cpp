@@ -32,7 +32,7 @@ void addStiffBlock(Simulation& sim) {
     Water::Params w;
     w.bulkModulus = 1e7f;
     addWaterBlock(sim, Vec3d(0, 0, 0), Vec3d(0.3, 0.3, 0.3), Vec3f::Zero(), w);
-    sim.addCollider(std::make_unique<PlaneCollider>(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Sticky, 0.0f));
+    sim.addCollider(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Sticky, 0.0f));
 }
 }  // namespace
 
@@ -70,7 +70,7 @@ TEST(Stability, ARestingBlockAtDefaultSettingsTripsNoCheck) {
     Simulation sim(s);
     Water::Params w;
     addWaterBlock(sim, Vec3d(0, 0, 0), Vec3d(0.3, 0.3, 0.3), Vec3f::Zero(), w);
-    sim.addCollider(std::make_unique<PlaneCollider>(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Sticky, 0.0f));
+    sim.addCollider(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Sticky, 0.0f));
     EXPECT_EQ(failure(sim, 24), "");
     EXPECT_EQ(sim.retryCount(), 0);
 }

@@ -141,7 +141,7 @@ Simulation dropOnFloor(const Vec3d& shift, Interpolation order = Interpolation::
     s.adaptive = true;
     Simulation sim(s);
     addWaterBlock(sim, shift + Vec3d(0, 0.1, 0), shift + Vec3d(0.4, 0.5, 0.3), Vec3f(0.5f, 0.0f, 0.0f));
-    sim.addCollider(std::make_unique<PlaneCollider>(shift, Vec3d::UnitY(), Boundary::Slip, 0.2f));
+    sim.addCollider(planeCollider(shift, Vec3d::UnitY(), Boundary::Slip, 0.2f));
     return sim;
 }
 }  // namespace

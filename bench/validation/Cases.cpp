@@ -132,7 +132,7 @@ CaseResult rigidRotation(const CaseConfig& c) {
     sim.refreshSpeedBound();
     const Vec3d L0 = sim.measure().angularMomentum;
     // A quarter of a cell per step at the rim.
-    const double dt = 0.25 * sim.settings().dx / (w.norm() * s.scene.sets[0].shape.radius);
+    const double dt = 0.25 * sim.settings().dx / (w.norm() * std::get<Sphere>(s.scene.sets[0].shape).radius);
     const auto start = std::chrono::steady_clock::now();
     for (int n = 0; n < kRotationSteps; ++n) sim.substep(dt);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -332,7 +332,8 @@ CaseResult damBreak(const CaseConfig& c) {
     Setup s = load("dam_break", c);
     Simulation& sim = *s.sim;
     const auto& sp = only<Water>(sim);
-    const double a = s.scene.sets[0].shape.max[0], depth = s.scene.sets[0].shape.max[2];
+    const Box& block = std::get<Box>(s.scene.sets[0].shape);
+    const double a = block.max[0], depth = block.max[2];
     const double g = -sim.settings().gravity[1], dx = sim.settings().dx;
     const auto front = readTable("martin_moyce_n2_front.csv");
     const auto height = readTable("martin_moyce_n2_height.csv");

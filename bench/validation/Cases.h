@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/Kernels.h"
-#include "sparse/Transfer.h"
+#include "core/Transfer.h"
 
 namespace mpm::validation {
 

@@ -1,14 +1,11 @@
-#include "sparse/Transfer.h"
-
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-#include <tbb/parallel_scan.h>
+#include "core/Transfer.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <functional>
 #include <type_traits>
+
+#include "sparse/LeafParallel.h"
 
 namespace mpm {
 
@@ -16,12 +13,6 @@ namespace {
 
 /// Up to this many particles in a leaf, the transfers find the part of the local block they reach.
 constexpr std::size_t kFewParticles = 32;
-
-/// Leaves per G2P task: a leaf holds hundreds of particles, so one is enough work to balance.
-constexpr std::size_t kG2PLeafGrain = 1;
-/// Leaves per task in the per-leaf bookkeeping (range prefix sum) and in P2G's sum into the grid.
-constexpr std::size_t kLeafGrain = 256;
-constexpr std::size_t kSumLeafGrain = 16;
 
 /// Four floats in one SSE register (GCC/Clang vector extension): a node's (mass, momentum) in P2G and its
 /// (velocity, 0) in G2P, so that each node costs one vector operation instead of four scalar ones.
@@ -54,7 +45,7 @@ struct LocalBlock {
                 [&](const auto& sp) {
                     for (uint32_t p = sp.leafStart[l]; p < sp.leafStart[l + 1]; ++p)
                         for (int a = 0; a < 3; ++a) {
-                            const int base = floorToInt(sp.p.x[p][a] * invDx - K::kBaseShift) - origin[a];
+                            const int base = placeOnAxis(sp.p.x[p][a], invDx, K::kBaseShift).base - origin[a];
                             r.lo[a] = std::min(r.lo[a], base);
                             r.hi[a] = std::max(r.hi[a], base + K::kWidth);
                         }
@@ -81,7 +72,7 @@ struct LocalBlock {
             for (int b = lo1; b < hi1; ++b)
                 for (int c = lo2; c < hi2; ++c) {
                     // A neighbour that no stencil of this leaf reaches is not allocated; nothing reads it.
-                    const uint32_t n = nb[((a >> kLeafLog2) << 2) | ((b >> kLeafLog2) << 1) | (c >> kLeafLog2)];
+                    const uint32_t n = nb[neighbourOfBlockNode(a, b, c)];
                     if (n == SparseGrid::kNoLeaf) continue;
                     f(index(a, b, c), grid.leaf(n), leafOffset(a & (kLeafDim - 1), b & (kLeafDim - 1), c & (kLeafDim - 1)));
                 }
@@ -100,10 +91,9 @@ struct Stencil {
 
     [[gnu::always_inline]] Stencil(const Vec3d& x, double invDx, float dx, const Vec3i& leafOrigin) {
         for (int a = 0; a < 3; ++a) {
-            const double g = x[a] * invDx;
-            const int base = floorToInt(g - K::kBaseShift);
-            fx[a] = float(g - double(base));  // exact up to double rounding, far from the origin too
-            local[a] = base - leafOrigin[a];
+            const AxisPlacement at = placeOnAxis(x[a], invDx, K::kBaseShift);
+            fx[a] = at.offset;
+            local[a] = at.base - leafOrigin[a];
             K::weights(fx[a], w[a], dw[a]);
             for (int i = 0; i < K::kWidth; ++i) d[a][i] = (float(i) - fx[a]) * dx;
         }
@@ -197,7 +187,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
     auto part = [](const Range& r, int d) {
         Range q;
         for (int a = 0; a < 3; ++a) {
-            const bool up = (d >> (2 - a)) & 1;
+            const bool up = neighbourStep(d, a);
             q.lo[a] = std::max(r.lo[a], up ? kLeafDim : 0);
             q.hi[a] = std::min(r.hi[a], up ? B::N : kLeafDim);
         }
@@ -210,7 +200,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
     auto box = [](const Range& q, int d) {
         NodeBox b;
         for (int a = 0; a < 3; ++a) {
-            const int shift = ((d >> (2 - a)) & 1) * kLeafDim;
+            const int shift = neighbourStep(d, a) * kLeafDim;
             b.lo[a] = int8_t(q.lo[a] - shift);
             b.hi[a] = int8_t(q.hi[a] - shift);
         }
@@ -218,7 +208,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
     };
     std::vector<Range> range(P);
     std::vector<std::size_t> offset(P);
-    std::vector<std::array<std::size_t, 8>> partStart(P);  // where pass 1 put each halo part d = 1..7
+    std::vector<std::array<std::size_t, kNeighbours>> partStart(P);  // where pass 1 put each halo part d = 1..7
     // The part of particle leaf i's block kept for neighbour d: none where that neighbour is not
     // allocated (no stencil reaches it, so the block is zero there).
     auto halo = [&](std::size_t i, int d) {
@@ -226,28 +216,18 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
     };
     auto haloVolume = [&](std::size_t i) {
         std::size_t v = 0;
-        for (int d = 1; d < 8; ++d) v += volume(halo(i, d));
+        for (int d = 1; d < kNeighbours; ++d) v += volume(halo(i, d));
         return v;
     };
-    tbb::parallel_for(std::size_t(0), P, [&](std::size_t i) {
-        range[i] = B::reach(species, leaves[i], grid.leaf(leaves[i]).origin, grid.dx());
-    });
-    const std::size_t total = tbb::parallel_scan(
-        tbb::blocked_range<std::size_t>(0, P, kLeafGrain), std::size_t(0),
-        [&](const tbb::blocked_range<std::size_t>& r, std::size_t sum, bool final) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                if (final) offset[i] = sum;
-                sum += haloVolume(i);
-            }
-            return sum;
-        },
-        std::plus<std::size_t>());
+    forEachLeaf(P, LeafGrain::Particles, [&](std::size_t i) { range[i] = B::reach(species, leaves[i], grid.leaf(leaves[i]).origin, grid.dx()); });
+    const std::size_t total =
+        prefixSumOverLeaves<std::size_t>(P, haloVolume, [&](std::size_t i, std::size_t sum) { offset[i] = sum; });
     std::vector<float>& scratch = grid.transferScratch();
     if (scratch.size() < 4 * total) scratch.resize(4 * total);
     f4* const halos = reinterpret_cast<f4*>(scratch.data());  // malloc aligns to 16 bytes on x86-64
 
     // Pass 1. The halo parts d = 1..7 are stored one after another, each x-major over its box.
-    tbb::parallel_for(std::size_t(0), P, [&](std::size_t i) {
+    forEachLeaf(P, LeafGrain::Particles, [&](std::size_t i) {
         const uint32_t l = leaves[i];
         const Range& r = range[i];
         const LeafView& leaf = grid.leaf(l);
@@ -273,7 +253,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
                     leaf.momentum[3 * o + 2] = v[3];
                 }
         f4* out = halos + offset[i];
-        for (int d = 1; d < 8; ++d) {
+        for (int d = 1; d < kNeighbours; ++d) {
             partStart[i][d] = std::size_t(out - halos);
             const Range q = halo(i, d);
             if (volume(q) == 0) continue;
@@ -284,32 +264,30 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
     });
 
     // Pass 2. Block node (a, b, c) of the particle leaf at offset -d lies in this leaf at (a, b, c) - 8 d.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.leafCount(), kSumLeafGrain), [&](const tbb::blocked_range<std::size_t>& rr) {
-        for (std::size_t g = rr.begin(); g < rr.end(); ++g) {
-            const LeafView& leaf = grid.leaf(g);
-            const std::array<uint32_t, 8>& src = grid.sources(g);
-            NodeBox written;
-            if (src[0] == SparseGrid::kNoLeaf) zero(leaf, grid.writtenBox(g));  // no particles of its own: pass 1 did not write it
-            else written = box(part(range[src[0]], 0), 0);
-            for (int d = 1; d < 8; ++d) {
-                if (src[d] == SparseGrid::kNoLeaf) continue;
-                const f4* in = halos + partStart[src[d]][d];
-                const Range q = halo(src[d], d);
-                if (volume(q) == 0) continue;
-                const int shift[3] = {kLeafDim * (d >> 2), kLeafDim * ((d >> 1) & 1), kLeafDim * (d & 1)};
-                written.add(box(q, d));
-                for (int a = q.lo[0]; a < q.hi[0]; ++a)
-                    for (int b = q.lo[1]; b < q.hi[1]; ++b)
-                        for (int c = q.lo[2]; c < q.hi[2]; ++c, ++in) {
-                            const int o = leafOffset(a - shift[0], b - shift[1], c - shift[2]);
-                            leaf.mass[o] += (*in)[0];
-                            leaf.momentum[3 * o + 0] += (*in)[1];
-                            leaf.momentum[3 * o + 1] += (*in)[2];
-                            leaf.momentum[3 * o + 2] += (*in)[3];
-                        }
-            }
-            grid.writtenBox(g) = written;
+    forEachLeaf(grid.leafCount(), LeafGrain::Nodes, [&](std::size_t g) {
+        const LeafView& leaf = grid.leaf(g);
+        const std::array<uint32_t, kNeighbours>& src = grid.sources(g);
+        NodeBox written;
+        if (src[0] == SparseGrid::kNoLeaf) zero(leaf, grid.writtenBox(g));  // no particles of its own: pass 1 did not write it
+        else written = box(part(range[src[0]], 0), 0);
+        for (int d = 1; d < kNeighbours; ++d) {
+            if (src[d] == SparseGrid::kNoLeaf) continue;
+            const f4* in = halos + partStart[src[d]][d];
+            const Range q = halo(src[d], d);
+            if (volume(q) == 0) continue;
+            const int shift[3] = {kLeafDim * neighbourStep(d, 0), kLeafDim * neighbourStep(d, 1), kLeafDim * neighbourStep(d, 2)};
+            written.add(box(q, d));
+            for (int a = q.lo[0]; a < q.hi[0]; ++a)
+                for (int b = q.lo[1]; b < q.hi[1]; ++b)
+                    for (int c = q.lo[2]; c < q.hi[2]; ++c, ++in) {
+                        const int o = leafOffset(a - shift[0], b - shift[1], c - shift[2]);
+                        leaf.mass[o] += (*in)[0];
+                        leaf.momentum[3 * o + 0] += (*in)[1];
+                        leaf.momentum[3 * o + 1] += (*in)[2];
+                        leaf.momentum[3 * o + 2] += (*in)[3];
+                    }
         }
+        grid.writtenBox(g) = written;
     });
 }
 
@@ -435,12 +413,10 @@ G2PSummary gridToParticles(const SparseGrid& grid, std::vector<AnySpecies>& spec
     // A deterministic reduction (fixed split, joins in leaf order): the first bad particle reported is the
     // first in leaf order whatever the thread count, and no serial pass over the leaves is left.
     return withScheme(s, [&]<class K, bool MLS>() {
-        return tbb::parallel_deterministic_reduce(
-            tbb::blocked_range<std::size_t>(0, leaves.size(), kG2PLeafGrain), none,
-            [&](const tbb::blocked_range<std::size_t>& r, G2PSummary acc) {
-                for (std::size_t i = r.begin(); i < r.end(); ++i)
-                    gatherLeaf<K, MLS>(grid, species, leaves[i], dt, apic, acc.maxSpeed, acc.minStiffnessKey.data(), acc);
-                return acc;
+        return reduceLeaves(
+            leaves.size(), LeafGrain::Particles, none,
+            [&](std::size_t i, G2PSummary& acc) {
+                gatherLeaf<K, MLS>(grid, species, leaves[i], dt, apic, acc.maxSpeed, acc.minStiffnessKey.data(), acc);
             },
             [](G2PSummary a, const G2PSummary& b) {
                 a.maxSpeed = std::max(a.maxSpeed, b.maxSpeed);

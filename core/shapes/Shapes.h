@@ -1,0 +1,32 @@
+#pragma once
+// The closed lists of shapes: those that fill particle sets (a finite volume, `contains`, `volume`,
+// `bounds`) and those that collide (a signed distance, positive outside, and its normal). Each shape is one
+// file with its formula and scene keys; a new one is that file and one entry in a list here.
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "core/shapes/Box.h"
+#include "core/shapes/Plane.h"
+#include "core/shapes/Sphere.h"
+
+namespace mpm {
+
+using SetShape = std::variant<Box, Sphere>;
+using ColliderShape = std::variant<Plane, Sphere>;
+
+/// The `type` names of a list's shapes, in order.
+template <class... S>
+std::vector<std::string> shapeTypeNames(const std::variant<S...>*) {
+    return {S::kType...};
+}
+
+/// Sets `out` to the default shape whose kType is `type`; false when none is.
+template <class... S>
+bool shapeOfType(const std::string& type, std::variant<S...>& out) {
+    bool found = false;
+    ((!found && type == S::kType ? (out = S{}, found = true) : false), ...);
+    return found;
+}
+
+}  // namespace mpm

@@ -1,0 +1,67 @@
+#pragma once
+// A scene as plain data: what the scene file says, with every default filled in, and nothing live. The
+// reader (io/SceneReader.h) makes one from JSON; the builder (io/SceneBuilder.h) makes a Simulation from it.
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/Collider.h"
+#include "core/Simulation.h"
+#include "core/Species.h"
+#include "core/shapes/Shapes.h"
+
+namespace mpm {
+
+/// A scene that cannot be used as written. what() reads "FILE: /json/path: problem".
+class SceneError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+enum class Sampling { Poisson, Grid, Lattice };
+
+struct ParticleSetDesc {
+    std::string name;
+    std::string material = "water";  ///< scene name of the material (materials/Materials.h)
+    AnyMaterialParams params;        ///< its parameters, overrides applied; the Lame scales below come on top
+    SetShape shape;
+    Vec3f velocity = Vec3f::Zero();
+    double particlesPerCell = 8.0;  ///< used unless count > 0
+    long long count = 0;
+    Sampling sampling = Sampling::Poisson;
+    int startFrame = 0, durationFrames = 1, pauseFrames = 0;
+    double lambdaScale = 1.0, muScale = 1.0, massScale = 1.0;
+    unsigned seed = 1;
+};
+
+struct ColliderDesc {
+    ColliderShape shape;
+    Boundary boundary = Boundary::Slip;
+    float friction = 0.0f;
+};
+
+struct OutputDesc {
+    std::string directory = "out";
+    bool points = true;         ///< VDB PointDataGrid "points"
+    bool surface = true;        ///< narrow-band level set "surface"
+    bool density = false;       ///< fog volume "density"
+    bool velocity = false;      ///< vector grid "vel"
+    bool splitFiles = false;    ///< points in <scene>_points_NNNN.vdb, volumes in <scene>_NNNN.vdb
+    bool ply = false;           ///< binary PLY per frame (Blender reads it)
+    double surfaceRadius = 1.0; ///< sphere radius in particle spacings
+    std::string surfaceGroup = "all";  ///< all | material | set: one surface grid per group
+};
+
+struct SceneDesc {
+    std::string file;    ///< path it was read from
+    std::string name;    ///< file stem, used in output names
+    SimulationSettings settings;
+    int frames = 48;
+    int threads = 0;     ///< 0 = all cores
+    OutputDesc output;
+    std::vector<ParticleSetDesc> sets;
+    std::vector<ColliderDesc> colliders;
+    std::string resolvedJson;  ///< the scene with every default filled in
+};
+
+}  // namespace mpm

@@ -1,0 +1,246 @@
+// Scene reading with nlohmann::json. A JsonKeys walks one JSON object as a key visitor (materials/
+// Parameters.h): it remembers its path for errors, records every value it hands out (defaults included)
+// into the resolved scene, and rejects keys nobody asked for.
+#include "io/SceneReader.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <sstream>
+
+#include "io/SceneKeys.h"
+
+namespace mpm {
+
+using json = nlohmann::ordered_json;
+
+namespace {
+
+std::string joinNames(const std::vector<std::string>& v) {
+    std::string out;
+    for (std::size_t i = 0; i < v.size(); ++i) out += (i ? ", " : "") + v[i];
+    return out;
+}
+
+std::string formatNumber(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
+class JsonKeys {
+public:
+    JsonKeys(const json& in, json& out, std::string path, const std::string& file)
+        : in_(in), out_(out), path_(std::move(path)), file_(file) {
+        if (!in_.is_object()) fail("", "expected an object");
+    }
+
+    [[noreturn]] void fail(std::string_view key, const std::string& what) const {
+        const std::string where = path_.empty() && key.empty() ? "/" : path_ + (key.empty() ? "" : "/" + std::string(key));
+        throw SceneError(file_ + ": " + where + ": " + what);
+    }
+    const std::string& path() const { return path_; }
+    bool has(std::string_view key) const { return in_.contains(key); }
+
+    // The key visitor (materials/Parameters.h).
+    template <class T>
+    void number(const Key& k, T& value) {
+        double v = double(value);
+        if (const json* j = take(k)) {
+            if (!j->is_number()) fail(k.name, "expected a number, got " + j->dump());
+            v = j->get<double>();
+            if (!std::isfinite(v) || v < k.lo || v > k.hi)
+                fail(k.name, "value " + formatNumber(v) + " out of range; allowed: " + formatNumber(k.lo) + " to " + formatNumber(k.hi) +
+                                 (k.unit.empty() ? "" : " " + std::string(k.unit)));
+        }
+        out_[std::string(k.name)] = v;
+        value = T(v);
+    }
+    template <class T>
+    void integer(const Key& k, T& value) {
+        long long v = static_cast<long long>(value);
+        if (const json* j = take(k)) {
+            if (!j->is_number_integer()) fail(k.name, "expected an integer, got " + j->dump());
+            v = j->get<long long>();
+            if (double(v) < k.lo || double(v) > k.hi)
+                fail(k.name, "value " + std::to_string(v) + " out of range; allowed: " + std::to_string((long long)k.lo) + " to " +
+                                 std::to_string((long long)k.hi));
+        }
+        out_[std::string(k.name)] = v;
+        value = T(v);
+    }
+    void flag(const Key& k, bool& value) {
+        if (const json* j = take(k)) {
+            if (!j->is_boolean()) fail(k.name, "expected true or false, got " + j->dump());
+            value = j->get<bool>();
+        }
+        out_[std::string(k.name)] = value;
+    }
+    template <class T>
+    void vec3(const Key& k, Eigen::Matrix<T, 3, 1>& value) {
+        Vec3d v = value.template cast<double>();
+        if (const json* j = take(k)) {
+            if (!j->is_array() || j->size() != 3) fail(k.name, "expected a list of 3 numbers, got " + j->dump());
+            for (int i = 0; i < 3; ++i) {
+                if (!(*j)[i].is_number()) fail(k.name, "expected a list of 3 numbers, got " + j->dump());
+                v[i] = (*j)[i].template get<double>();
+                if (!std::isfinite(v[i])) fail(k.name, "non-finite component");
+            }
+        }
+        out_[std::string(k.name)] = {v[0], v[1], v[2]};
+        value = v.cast<T>();
+    }
+    void text(const Key& k, std::string& value) {
+        if (const json* j = take(k)) {
+            if (!j->is_string()) fail(k.name, "expected a string, got " + j->dump());
+            value = j->get<std::string>();
+        }
+        out_[std::string(k.name)] = value;
+    }
+    void choice(const Key& k, std::string& value, const std::vector<std::string>& allowed) {
+        text(k, value);
+        for (const std::string& a : allowed)
+            if (a == value) return;
+        fail(k.name, "unknown " + std::string(k.noun) + " \"" + value + "\"; known: " + joinNames(allowed));
+    }
+    template <class E>
+    void choice(const Key& k, E& value, std::span<const Named<E>> names) {
+        std::string name;
+        std::vector<std::string> allowed;
+        for (const Named<E>& n : names) {
+            allowed.push_back(n.name);
+            if (n.value == value) name = n.name;
+        }
+        choice(k, name, allowed);
+        for (const Named<E>& n : names)
+            if (name == n.name) value = n.value;
+    }
+    void check(bool ok, std::string_view key, const std::string& problem) const {
+        if (!ok) fail(key, problem);
+    }
+
+    // Structure.
+    JsonKeys child(const char* key) {
+        static const json empty = json::object();
+        const json* j = take(Key{.name = key});
+        out_[key] = json::object();
+        return JsonKeys(j ? *j : empty, out_[key], path_ + "/" + key, file_);
+    }
+    std::vector<JsonKeys> array(const char* key) {
+        std::vector<JsonKeys> items;
+        out_[key] = json::array();
+        const json* j = take(Key{.name = key});
+        if (!j) return items;
+        if (!j->is_array()) fail(key, "expected a list of objects");
+        for (std::size_t i = 0; i < j->size(); ++i) out_[key].push_back(json::object());
+        for (std::size_t i = 0; i < j->size(); ++i) items.emplace_back((*j)[i], out_[key][i], path_ + "/" + key + "/" + std::to_string(i), file_);
+        return items;
+    }
+    /// Unknown keys are errors: a typo must not silently fall back to a default.
+    void finish() const {
+        for (auto it = in_.begin(); it != in_.end(); ++it)
+            if (!read_.count(it.key())) fail(it.key(), "unknown key; known here: " + joinNames(known_));
+    }
+
+private:
+    const json* take(const Key& k) {
+        const std::string key(k.name);
+        if (read_.insert(key).second) known_.push_back(key);
+        auto it = in_.find(key);
+        if (it == in_.end() && k.required) fail(k.name, "missing required field");
+        return it == in_.end() ? nullptr : &*it;
+    }
+    const json& in_;
+    json& out_;
+    std::string path_;
+    const std::string& file_;
+    std::set<std::string> read_;
+    std::vector<std::string> known_;  ///< in the order asked for
+};
+
+/// A `type` key choosing one alternative of a shape list, then that shape's keys.
+template <class Shape>
+void readShape(JsonKeys& n, Shape& shape, const char* defaultType, const char* noun) {
+    std::string type = defaultType;
+    n.choice(Key{.name = "type", .noun = noun}, type, shapeTypeNames(&shape));
+    shapeOfType(type, shape);
+    std::visit([&]<class S>(S& s) { S::keys(n, s); }, shape);
+}
+
+void readSet(JsonKeys& n, std::size_t index, SceneDesc& scene) {
+    ParticleSetDesc d;
+    d.name = "set" + std::to_string(index);
+    d.seed = unsigned(index + 1);
+    setKeys(n, d);
+    for (const ParticleSetDesc& other : scene.sets)
+        if (other.name == d.name) n.fail("name", "duplicate set name \"" + d.name + "\"");
+    {
+        JsonKeys shape = n.child("shape");
+        readShape(shape, d.shape, Box::kType, "shape");
+        shape.finish();
+    }
+    JsonKeys params = n.child("material_params");
+    defaultMaterialParams(d.material, d.params);
+    visitMaterialParams(d.params, [&]<class M>(typename M::Params& p) { M::keys(params, p); });
+    params.finish();
+    n.finish();
+    scene.sets.push_back(std::move(d));
+}
+
+void readCollider(JsonKeys& n, SceneDesc& scene) {
+    ColliderDesc c;
+    std::string type = Plane::kType;
+    n.choice(Key{.name = "type", .noun = "collider"}, type, shapeTypeNames(&c.shape));
+    shapeOfType(type, c.shape);
+    colliderKeys(n, c);
+    std::visit([&]<class S>(S& s) { S::keys(n, s); }, c.shape);
+    n.finish();
+    scene.colliders.push_back(std::move(c));
+}
+
+}  // namespace
+
+SceneDesc loadScene(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw SceneError(path + ": cannot open the file");
+    return parseScene(std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()), path);
+}
+
+SceneDesc parseScene(const std::string& text, const std::string& path) {
+    SceneDesc scene;
+    scene.file = path;
+    scene.name = std::filesystem::path(path).stem().string();
+    json doc;
+    try {
+        doc = json::parse(text);
+    } catch (const json::parse_error& e) {
+        throw SceneError(path + ": not valid JSON: " + e.what());
+    }
+    json resolved = json::object();
+    JsonKeys root(doc, resolved, "", path);
+    {
+        JsonKeys n = root.child("simulation");
+        simulationKeys(n, scene);
+        n.finish();
+    }
+    {
+        JsonKeys n = root.child("output");
+        scene.output.directory = "out/" + scene.name;
+        outputKeys(n, scene.output);
+        n.finish();
+    }
+    // Particle sets, each becoming one species with its own parameters.
+    std::vector<JsonKeys> sets = root.array("sets");
+    if (sets.empty()) root.fail("sets", "a scene needs at least one particle set");
+    for (std::size_t i = 0; i < sets.size(); ++i) readSet(sets[i], i, scene);
+    for (JsonKeys& n : root.array("colliders")) readCollider(n, scene);
+    root.finish();
+    scene.resolvedJson = resolved.dump(2);
+    return scene;
+}
+
+}  // namespace mpm

@@ -1,0 +1,67 @@
+#pragma once
+// How a material, a shape or a set of settings names its scene keys. Each such type has one function,
+// `keys(v, value)`, that hands every field to a visitor together with its key, range, unit and help text;
+// the value's initial content is the default. The scene reader, `mpm validate --explain` (and so
+// docs/scene-format.md) and the benchmark presets all walk that one function, so a key, its default and its
+// documentation cannot drift apart. A visitor has this shape (KeyVisitorArchetype below is one):
+// @code
+// struct Visitor {
+//     template <class T> void number(const Key&, T& value);    // float or double
+//     template <class T> void integer(const Key&, T& value);   // int, long long, unsigned
+//     void flag(const Key&, bool& value);
+//     template <class T> void vec3(const Key&, Eigen::Matrix<T, 3, 1>& value);  // Vec3d or Vec3f
+//     void text(const Key&, std::string& value);
+//     template <class E> void choice(const Key&, E& value, std::span<const Named<E>> names);  // an enum
+//     void choice(const Key&, std::string& value, const std::vector<std::string>& allowed);
+//     void check(bool ok, std::string_view key, const std::string& problem);  // a rule between keys
+// };
+// @endcode
+#include <limits>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/Types.h"
+
+namespace mpm {
+
+/// The widest range most physical quantities accept: above zero, below 1e12 (in SI units).
+inline constexpr double kTiny = 1e-12;
+inline constexpr double kHuge = 1e12;
+
+/// One scene key: its name, what it means, its range (numbers and integers), unit, and whether it must be given.
+struct Key {
+    std::string_view name;
+    std::string_view help;
+    double lo = -std::numeric_limits<double>::infinity();
+    double hi = std::numeric_limits<double>::infinity();
+    std::string_view unit = "";
+    bool required = false;
+    std::string_view noun = "value";  ///< what a choice picks, for "unknown <noun>" messages
+};
+
+/// A name for one value of an enumeration.
+template <class E>
+struct Named {
+    E value;
+    const char* name;
+};
+
+/// A visitor that does nothing: the concept checks below call keys() with it.
+struct KeyVisitorArchetype {
+    template <class T> void number(const Key&, T&) {}
+    template <class T> void integer(const Key&, T&) {}
+    void flag(const Key&, bool&) {}
+    template <class T> void vec3(const Key&, Eigen::Matrix<T, 3, 1>&) {}
+    void text(const Key&, std::string&) {}
+    template <class E> void choice(const Key&, E&, std::span<const Named<E>>) {}
+    void choice(const Key&, std::string&, const std::vector<std::string>&) {}
+    void check(bool, std::string_view, const std::string&) {}
+};
+
+/// A type that describes its scene keys.
+template <class T>
+concept HasSceneKeys = requires(KeyVisitorArchetype& v, T& value) { T::keys(v, value); };
+
+}  // namespace mpm
