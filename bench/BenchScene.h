@@ -1,5 +1,5 @@
 #pragma once
-// The benchmark scene of issue 6: blocks of particles at 8 per cell (spacing dx/2) resting one cell above
+// The benchmark scene of the performance report (docs/performance/summary.md): blocks of particles at 8 per cell (spacing dx/2) resting one cell above
 // a slip floor and falling onto it (upper blobs fall freely), for any material, as one block or as 8 blobs at the corners of a
 // cube spread over many cells. Shared by the scene-level driver and the Google Benchmark kernels.
 #include <cmath>

@@ -1,4 +1,4 @@
-// Google Benchmark for the kernels of one substep (issue 6), on the benchmark block (BenchScene.h) with
+// Google Benchmark for the kernels of one substep, on the benchmark block (BenchScene.h) with
 // 8 particles per cell: topology update, binning, P2G, grid update and G2P per material, and the
 // per-particle material work (stress, return mapping, SVD) apart. Counters report particles per second.
 //   mpm_bench_kernels [--benchmark_filter=...] [--benchmark_out=kernels.json --benchmark_out_format=json]

@@ -1,4 +1,4 @@
-// Scene-level performance driver (issue 6). Each measurement runs in a child process of its own, so that
+// Scene-level performance driver (docs/performance/summary.md). Each measurement runs in a child process of its own, so that
 // its peak memory is its own and no run warms the next one's caches or allocator.
 //   mpm_bench one --material jelly --particles 1e6 --threads 2      one measurement, one CSV row
 //   mpm_bench one --experiment paired --threads 2 ...                 1 and 2 threads interleaved, two rows

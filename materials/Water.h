@@ -85,7 +85,7 @@ struct Water {
 
     static float volumeRatio(const State& s, std::size_t i) { return s.J[i]; }
 
-    /// The wave speed grows as J shrinks: c = sqrt(k gamma / rho0) J^((1-gamma)/2) (validation README).
+    /// The wave speed grows as J shrinks: c = sqrt(k gamma / rho0) J^((1-gamma)/2) (docs/method.md, section 4).
     static float stiffnessKey(const State& s, std::size_t i) { return s.J[i]; }
     static float waveSpeed(const Params& m, float minJ) {
         const float J = std::fmax(minJ, 1e-3f);

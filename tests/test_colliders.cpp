@@ -1,4 +1,4 @@
-// Colliders on grid nodes (ALGORITHM.md section 5): the node response rule, and water on a plane.
+// Colliders on grid nodes (docs/method.md, section 7): the node response rule, and water on a plane.
 #include <gtest/gtest.h>
 
 #include "TestScenes.h"

@@ -48,7 +48,7 @@ struct GoldenScene {
     const char* text;
     int frames;     ///< whole frames run with advanceFrame (emission, energy checks and retries included)
     int substeps;   ///< then this many substeps of the target length
-    uint64_t hash;  ///< recorded before the layout change of issue 13
+    uint64_t hash;  ///< recorded before the change that split state, caches and scene reading
 };
 
 uint64_t runScene(const GoldenScene& g) {

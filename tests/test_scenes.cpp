@@ -1,4 +1,4 @@
-// Scene checks (issue 4): how whole scenes of the solid materials behave, which the per-material tests
+// Scene checks: how whole scenes of the solid materials behave, which the per-material tests
 // cannot see. Each scene is scene-file text read by the real parser, as a user's file would be.
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // The cheap end of the validation report (bench/validation/Cases.cpp): each case at its coarsest useful
-// resolution, asserted against its pass band from ../shared/validation/README.md.
+// resolution, asserted against its pass band from docs/validation/cases.md.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -4,7 +4,7 @@
     python3 tools/perf_report.py docs/performance
 
 Every number comes from the CSV/JSON of one run of tools/perf_report.sh on one machine; the targets
-table is issue 6's, each with the measured value and the ratio measured / target.
+table holds the project's performance targets, each with the measured value and the ratio measured / target.
 """
 import csv
 import json
@@ -17,7 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 THESIS_PSS = 3.0e3                                  # single-threaded C# (thesis)
-ZIRAN_HERE = {"jelly": 3.2e6, "water": 4.3e6}       # Ziran 2020 on this machine, 2 threads (issue 6)
+ZIRAN_HERE = {"jelly": 3.2e6, "water": 4.3e6}       # Ziran 2020 built and measured on this machine, 2 threads
 PHASES = ["topology", "binning", "p2g", "grid", "g2p", "other"]
 
 
@@ -230,7 +230,7 @@ def main(out):
         ratio = measured / target if target else float("nan")
         return f"| {name} | {fmt(measured)} | {better} {target:g} | {fmt(ratio, 'x')} | {'yes' if ok else '**no**'} |"
 
-    tr = ["## Targets (issue 6; 1M particles, quadratic, both threads)", "",
+    tr = ["## Targets (1M particles, quadratic, both threads)", "",
           "| target | measured | wanted | ratio | met |", "|---|---|---|---|---|"]
     for m, goal in [("water", 16e6), ("jelly", 8e6), ("snow", 6e6), ("sand", 6e6)]:
         tr.append(target_row(f"{m} PSS", pss.get((m, "quadratic", threads_all), float("nan")), goal, ">="))

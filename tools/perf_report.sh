@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# One command for the performance report (issue 6): builds the benchmarks in Release, runs the Google
+# One command for the performance report: builds the benchmarks in Release, runs the Google
 # Benchmark kernels and the scene-level suite (each measurement in its own process), and writes
 # docs/performance/ (perf.csv, kernels.json, PNG plots, summary.md with every target and its ratio).
 # Usage: bash tools/perf_report.sh [--quick]   (about 5 minutes on a 2-core machine; --quick: under 1)

@@ -155,7 +155,7 @@ def main():
     stab = read(os.path.join(out_dir, "stability.csv"))
     lines = ["# Validation report: error against run time, and stability", "",
              "Regenerate with `bash tools/validation_report.sh` (cases: `bench/validation/Cases.cpp`, scenes:",
-             "`scenes/validation/`, bands: `../shared/validation/README.md`). Numbers below come from this machine:", "",
+             "`scenes/validation/`, bands: `docs/validation/cases.md`). Numbers below come from this machine:", "",
              "```", machine, "```", ""]
     if acc:
         lines += ["Accuracy runs took %.0f s of simulation in all." % sum(float(r["wall_seconds"]) for r in acc), ""]

@@ -1,7 +1,7 @@
 // The validation cases. Each one: load scenes/validation/<case>.json, set dx = h / 2^level and the
 // choice under test, set the initial state the scene format cannot express (an analytic velocity or
 // pressure field), run, and reduce the run to one error number. Formulas and bands are those of
-// ../shared/validation/README.md; the published dam-break data sit beside the scenes.
+// docs/validation/cases.md; the published dam-break data sit beside the scenes.
 #include "Cases.h"
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 #pragma once
-// Validation cases with known answers (../shared/validation/README.md): each loads its scene from
+// Validation cases with known answers (docs/validation/cases.md): each loads its scene from
 // scenes/validation/, refines it, runs it and measures its error with the metric defined here. Used by
 // `mpm_report` (error against run time, over resolutions and accuracy/speed choices) and, at their
 // cheapest settings, by the unit tests.
@@ -46,7 +46,7 @@ struct ValidationCase {
 /// Where scenes/validation/ lives (defaults to the source tree this was built from).
 void setSceneDirectory(const std::string& dir);
 
-/// All cases, in the order of the validation README.
+/// All cases, in the order of docs/validation/cases.md.
 const std::vector<ValidationCase>& cases();
 const ValidationCase& findCase(const std::string& name);
 

@@ -1,5 +1,5 @@
 #pragma once
-// The stability sweep (../shared/validation/README.md, "Stability: stiff and extreme cases"): for every
+// The stability sweep (docs/validation/cases.md, "Stability sweep"): for every
 // material and kernel, CFL numbers from 0.1 to 1.2 on small stiff and extreme setups. A run is stable when
 // no blow-up check fires and total energy grows by less than 1% over its substeps.
 #include <string>
