@@ -1,8 +1,8 @@
 // mpm: the command-line front end. `mpm run SCENE` simulates and writes frames; `mpm validate SCENE`
 // checks a scene. Exit codes: 0 success, 2 bad input, 1 failed run.
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cstdio>
@@ -62,15 +62,19 @@ int run(const std::string& scenePath, const std::string& outDir, int threads, co
     const auto start = std::chrono::steady_clock::now();
     sim->emitDue();
     FrameStats st = sim->measure();
-    if (range.first == 0) writer.writeFrame(0, *sim, st);
-    else writer.recordStats(st);
+    if (range.first == 0)
+        writer.writeFrame(0, *sim, st);
+    else
+        writer.recordStats(st);
     long long particleSteps = 0;
     for (int f = 1; f <= range.last; ++f) {
         const std::size_t n = sim->particleCount();
         st = sim->advanceFrame();
         particleSteps += (long long)n * st.substeps;
-        if (f >= range.first) writer.writeFrame(f, *sim, st);
-        else writer.recordStats(st);
+        if (f >= range.first)
+            writer.writeFrame(f, *sim, st);
+        else
+            writer.recordStats(st);
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         const double eta = elapsed / f * (range.last - f);
         if (quiet) continue;
@@ -79,8 +83,8 @@ int run(const std::string& scenePath, const std::string& outDir, int threads, co
             std::fprintf(stderr, "\rframe %d/%d | %d substeps | %zu particles | %.3g particle-substeps/s | ETA %s   ", f,
                          range.last, st.substeps, st.particles, pss, clock(eta).c_str());
         else
-            std::fprintf(stderr, "frame %d/%d substeps %d particles %zu max_speed %.3g sim %.2fs write %.2fs pss %.3g eta %s\n", f,
-                         range.last, st.substeps, st.particles, st.maxSpeed, st.wallSeconds, writer.lastWriteSeconds(), pss,
+            std::fprintf(stderr, "frame %d/%d substeps %d particles %zu max_speed %.3g sim %.2fs write %.2fs pss %.3g eta %s\n",
+                         f, range.last, st.substeps, st.particles, st.maxSpeed, st.wallSeconds, writer.lastWriteSeconds(), pss,
                          clock(eta).c_str());
         if (st.retries)
             std::fprintf(stderr, "%smpm: frame %d was restarted %d times with half the time step (stability retries)\n",
@@ -106,7 +110,8 @@ int main(int argc, char** argv) {
     CLI::App* runCmd = app.add_subcommand("run", "simulate a scene and write its frames");
     runCmd->add_option("scene", scenePath, "scene file (JSON)")->required();
     runCmd->add_option("-o,--output", outDir, "output directory (default: the scene's output.directory)");
-    runCmd->add_option("--threads", threads, "worker threads (default: the scene's, else all cores)")->check(CLI::NonNegativeNumber);
+    runCmd->add_option("--threads", threads, "worker threads (default: the scene's, else all cores)")
+        ->check(CLI::NonNegativeNumber);
     runCmd->add_option("--frames", frames, "frames to write, A:B (simulation always starts at frame 0)");
     runCmd->add_flag("--quiet", quiet, "print nothing but errors");
 

@@ -1,7 +1,7 @@
 #pragma once
-// The benchmark scene of the performance report (docs/performance/summary.md): blocks of particles at 8 per cell (spacing dx/2) resting one cell above
-// a slip floor and falling onto it (upper blobs fall freely), for any material, as one block or as 8 blobs at the corners of a
-// cube spread over many cells. Shared by the scene-level driver and the Google Benchmark kernels.
+// The benchmark scene of the performance report (docs/performance/summary.md): blocks of particles at 8 per cell (spacing dx/2)
+// resting one cell above a slip floor and falling onto it (upper blobs fall freely), for any material, as one block or as 8 blobs
+// at the corners of a cube spread over many cells. Shared by the scene-level driver and the Google Benchmark kernels.
 #include <cmath>
 #include <memory>
 #include <random>
@@ -20,12 +20,12 @@ inline constexpr double kDx = 0.01;
 inline constexpr double kTargetDt = 1e-4;
 
 struct BenchScene {
-    std::string material = "water";        ///< water, jelly, rubber, snow, sand
+    std::string material = "water";  ///< water, jelly, rubber, snow, sand
     Interpolation kernel = Interpolation::Quadratic;
     long particles = 1000000;
-    int blobs = 1;                         ///< 1 block, or 8 blobs at the corners of a cube
-    double spreadCells = 0.0;              ///< edge of that cube in cells (blobs only)
-    bool spray = false;                    ///< particles scattered at random, most alone in their leaf
+    int blobs = 1;             ///< 1 block, or 8 blobs at the corners of a cube
+    double spreadCells = 0.0;  ///< edge of that cube in cells (blobs only)
+    bool spray = false;        ///< particles scattered at random, most alone in their leaf
 };
 
 /// Cube edge for spray, in cells: about four leaves' volume per particle, so most particles are alone.

@@ -119,11 +119,13 @@ void BM_SprayTransfers(benchmark::State& st) {
 }
 BENCHMARK(BM_SprayTransfers)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-#define MPM_TRANSFER_BENCH(material, kernel)                                                             \
-    BENCHMARK_CAPTURE(BM_P2G, material##_##kernel, #material, Interpolation::kernel)                    \
-        ->Unit(benchmark::kMillisecond)->UseRealTime();                                                  \
-    BENCHMARK_CAPTURE(BM_G2P, material##_##kernel, #material, Interpolation::kernel)                    \
-        ->Unit(benchmark::kMillisecond)->UseRealTime();
+#define MPM_TRANSFER_BENCH(material, kernel)                                         \
+    BENCHMARK_CAPTURE(BM_P2G, material##_##kernel, #material, Interpolation::kernel) \
+        ->Unit(benchmark::kMillisecond)                                              \
+        ->UseRealTime();                                                             \
+    BENCHMARK_CAPTURE(BM_G2P, material##_##kernel, #material, Interpolation::kernel) \
+        ->Unit(benchmark::kMillisecond)                                              \
+        ->UseRealTime();
 MPM_TRANSFER_BENCH(water, Quadratic)
 MPM_TRANSFER_BENCH(jelly, Quadratic)
 MPM_TRANSFER_BENCH(snow, Quadratic)
@@ -171,8 +173,10 @@ template <class M>
 void BM_Material(benchmark::State& st) {
     const std::vector<Mat3f> F = sampleF(4096);
     Species<M> sp;
-    if constexpr (requires { sp.state.appendRest(F.size(), sp.params); }) sp.state.appendRest(F.size(), sp.params);
-    else sp.state.appendRest(F.size());
+    if constexpr (requires { sp.state.appendRest(F.size(), sp.params); })
+        sp.state.appendRest(F.size(), sp.params);
+    else
+        sp.state.appendRest(F.size());
     Mat3f sum = Mat3f::Zero();
     std::mt19937 rng(3);
     std::normal_distribution<float> g(0.0f, 1.0f);

@@ -5,21 +5,21 @@
 //   mpm_bench output --particles 1e6                                the cost of writing a frame
 //   mpm_bench suite -o DIR [--quick]                                everything, into DIR/perf.csv
 // Rows: particle-substeps per second (PSS), memory per particle and each phase's share of a substep.
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
+#include <CLI/CLI.hpp>
 
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
-#include <numeric>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <numeric>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -255,7 +255,8 @@ int main(int argc, char** argv) {
         o.scene.kernel = o.kernel == "cubic" ? Interpolation::Cubic : Interpolation::Quadratic;
         if (*one && o.experiment == "paired")
             for (const std::string& r : measurePaired(o)) std::printf("row,%s\n", r.c_str());
-        else if (*one) std::printf("row,%s\n", measureSubsteps(o).c_str());
+        else if (*one)
+            std::printf("row,%s\n", measureSubsteps(o).c_str());
         if (*output)
             for (const std::string& r : measureOutput(o)) std::printf("row,%s\n", r.c_str());
         if (*all) suite(outDir, quick);

@@ -6,9 +6,12 @@ namespace mpm {
 
 const char* boundaryName(Boundary b) {
     switch (b) {
-        case Boundary::Sticky: return "sticky";
-        case Boundary::Slip: return "slip";
-        case Boundary::Separate: return "separate";
+        case Boundary::Sticky:
+            return "sticky";
+        case Boundary::Slip:
+            return "slip";
+        case Boundary::Separate:
+            return "separate";
     }
     return "?";
 }
@@ -22,8 +25,10 @@ Vec3f Collider::respond(const Vec3f& v, const Vec3f& n, const Vec3f& vc, Boundar
     // Coulomb: the tangential change is bounded by mu times the normal change |vn|.
     const float vt = tangential.norm();
     const float maxFriction = friction * std::fabs(vn);
-    if (vt <= maxFriction) tangential.setZero();
-    else tangential *= 1.0f - maxFriction / vt;
+    if (vt <= maxFriction)
+        tangential.setZero();
+    else
+        tangential *= 1.0f - maxFriction / vt;
     return vc + tangential;
 }
 

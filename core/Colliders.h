@@ -10,8 +10,9 @@ namespace mpm {
 
 /// A collider for any shape of the collider list.
 inline std::unique_ptr<Collider> makeCollider(const ColliderShape& shape, Boundary b, float friction) {
-    return std::visit([&]<class S>(const S& s) -> std::unique_ptr<Collider> { return std::make_unique<ShapeCollider<S>>(s, b, friction); },
-                      shape);
+    return std::visit(
+        [&]<class S>(const S& s) -> std::unique_ptr<Collider> { return std::make_unique<ShapeCollider<S>>(s, b, friction); },
+        shape);
 }
 
 inline std::unique_ptr<Collider> planeCollider(const Vec3d& point, const Vec3d& normal, Boundary b, float friction) {

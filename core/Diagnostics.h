@@ -15,15 +15,15 @@ struct FrameStats {
     double mass = 0.0;
     Vec3d momentum = Vec3d::Zero();
     Vec3d angularMomentum = Vec3d::Zero();  ///< about the origin, APIC affine part included
-    double kineticEnergy = 0.0;            ///< 1/2 m (|v|^2 + D |C|^2): APIC's affine part included
+    double kineticEnergy = 0.0;             ///< 1/2 m (|v|^2 + D |C|^2): APIC's affine part included
     double elasticEnergy = 0.0;
-    double gravityEnergy = 0.0;             ///< -sum m g . x (zero at the origin)
+    double gravityEnergy = 0.0;  ///< -sum m g . x (zero at the origin)
     double maxSpeed = 0.0;
     double minJ = 1.0, maxJ = 1.0;
     std::size_t activeLeaves = 0;
     std::size_t gridBytes = 0;
     int substeps = 0;
-    int retries = 0;                        ///< times this frame was restarted with half the time step
+    int retries = 0;  ///< times this frame was restarted with half the time step
     double wallSeconds = 0.0;
 
     /// Kinetic + stored + gravitational: without external work and dissipation it is constant.

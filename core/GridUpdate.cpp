@@ -6,8 +6,8 @@
 
 namespace mpm {
 
-float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders,
-                           const Vec3f& g, float dt, double tEnd) {
+float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& g,
+                           float dt, double tEnd) {
     return reduceLeafRanges(
         grid.leafCount(), LeafGrain::Nodes, 0.0f,
         [&](std::size_t begin, std::size_t end, float& vmax) {
@@ -22,10 +22,13 @@ float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique
                 box.forEach([&](int n) {
                     Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
                     const float m = leaf.mass[n];
-                    if (m != 0.0f) v = v / m + dt * g;
-                    else v.setZero();
+                    if (m != 0.0f)
+                        v = v / m + dt * g;
+                    else
+                        v.setZero();
                 });
-                for (std::size_t c = 0; c < colliders.size(); ++c) colliders[c]->applyToLeaf(leaf, box, grid.dx(), tEnd, contexts[c].get());
+                for (std::size_t c = 0; c < colliders.size(); ++c)
+                    colliders[c]->applyToLeaf(leaf, box, grid.dx(), tEnd, contexts[c].get());
                 box.forEach([&](int n) {
                     if (leaf.mass[n] != 0.0f) vmax = std::max(vmax, Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm());
                 });

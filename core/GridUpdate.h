@@ -11,7 +11,7 @@ namespace mpm {
 
 /// Turns momentum into velocity on every written node, adds gravity, applies the colliders at time tEnd.
 /// Returns the largest node speed.
-float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders,
-                           const Vec3f& gravity, float dt, double tEnd);
+float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
+                           float dt, double tEnd);
 
 }  // namespace mpm

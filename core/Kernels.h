@@ -37,10 +37,10 @@ struct CubicBSpline {
 
     /// fx: particle position minus base node, in cells, in [1, 2).
     static inline void weights(float fx, float w[kWidth], float dw[kWidth]) {
-        const float a = 2.0f - fx;         // outer piece at node 0: (2 - |u|)^3 / 6, u = fx
-        const float u1 = fx - 1.0f;        // inner piece at node 1, u in [0, 1)
-        const float u2 = 2.0f - fx;        // inner piece at node 2, |u| in (0, 1]
-        const float b = fx - 1.0f;         // outer piece at node 3: 2 - |fx - 3| = fx - 1
+        const float a = 2.0f - fx;   // outer piece at node 0: (2 - |u|)^3 / 6, u = fx
+        const float u1 = fx - 1.0f;  // inner piece at node 1, u in [0, 1)
+        const float u2 = 2.0f - fx;  // inner piece at node 2, |u| in (0, 1]
+        const float b = fx - 1.0f;   // outer piece at node 3: 2 - |fx - 3| = fx - 1
         w[0] = a * a * a / 6.0f;
         w[1] = 0.5f * u1 * u1 * u1 - u1 * u1 + 2.0f / 3.0f;
         w[2] = 0.5f * u2 * u2 * u2 - u2 * u2 + 2.0f / 3.0f;

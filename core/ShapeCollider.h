@@ -34,7 +34,8 @@ public:
             const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
             if (shape_.signedDistance(x) > 0.0) return;
             Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
-            v = respond(v, shape_.normalAt(x).template cast<float>(), velocity(x, t).template cast<float>(), boundary(), friction());
+            v = respond(v, shape_.normalAt(x).template cast<float>(), velocity(x, t).template cast<float>(), boundary(),
+                        friction());
         });
     }
 

@@ -19,9 +19,9 @@ struct StepBounds {
 
 /// The references of the energy blow-up check (core/Stability.h).
 struct EnergyReference {
-    bool set = false;      ///< measured once the first frame starts
-    double min = 0.0;      ///< lowest total energy since the last emission
-    double scale = 0.0;    ///< largest kinetic + stored energy seen
+    bool set = false;    ///< measured once the first frame starts
+    double min = 0.0;    ///< lowest total energy since the last emission
+    double scale = 0.0;  ///< largest kinetic + stored energy seen
 };
 
 struct SimState {
@@ -38,8 +38,16 @@ struct SimState {
     /// Calls f on every field but the species, in a fixed order (checkpoints write them in this order).
     template <class F>
     void forEachScalar(F&& f) {
-        f(time); f(frame); f(substeps); f(nextId); f(emittedFrame); f(retries);
-        f(bounds.maxSpeed); f(energy.set); f(energy.min); f(energy.scale);
+        f(time);
+        f(frame);
+        f(substeps);
+        f(nextId);
+        f(emittedFrame);
+        f(retries);
+        f(bounds.maxSpeed);
+        f(energy.set);
+        f(energy.min);
+        f(energy.scale);
     }
 };
 

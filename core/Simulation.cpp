@@ -34,8 +34,7 @@ private:
 
 Simulation::Simulation(const SimulationSettings& settings)
     : settings_(settings), guard_(settings.stability, settings.gravity.norm(), settings.dx) {
-    withKernel(settings_.transfer.interpolation,
-               [&]<class K>() { grid_.configure(settings_.dx, K::kBaseShift, K::kWidth); });
+    withKernel(settings_.transfer.interpolation, [&]<class K>() { grid_.configure(settings_.dx, K::kBaseShift, K::kWidth); });
 }
 
 float Simulation::kernelInertiaScale() const {
@@ -63,8 +62,10 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
             P.set.resize(n0 + n, set);
             for (std::size_t i = 0; i < n; ++i) P.id.push_back(state_.nextId++);
             // A model whose rest state depends on its parameters (sand's cone) takes them.
-            if constexpr (requires { sp.state.appendRest(n, sp.params); }) sp.state.appendRest(n, sp.params);
-            else sp.state.appendRest(n);
+            if constexpr (requires { sp.state.appendRest(n, sp.params); })
+                sp.state.appendRest(n, sp.params);
+            else
+                sp.state.appendRest(n);
             float& key = state_.bounds.minStiffnessKey[s];
             for (std::size_t i = n0; i < n0 + n; ++i) key = std::min(key, M::stiffnessKey(sp.state, i));
         },
@@ -74,8 +75,8 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
 
 void Simulation::restore(SimState state) {
     if (state.species.size() != state_.species.size())
-        throw std::invalid_argument("restore: the state has " + std::to_string(state.species.size()) + " species, the simulation " +
-                                    std::to_string(state_.species.size()));
+        throw std::invalid_argument("restore: the state has " + std::to_string(state.species.size()) +
+                                    " species, the simulation " + std::to_string(state_.species.size()));
     for (std::size_t s = 0; s < state.species.size(); ++s)
         if (state.species[s].index() != state_.species[s].index())
             throw std::invalid_argument("restore: species " + std::to_string(s) + " has another material");
@@ -110,7 +111,8 @@ double Simulation::cflTimeStep() const {
     // dt (c + |v| + |g| dt) = C dx: the speed bound is the one at the end of the step, so that gravity
     // cannot carry a very soft or resting body more than C dx in one step (c + |v| near 0 would allow any
     // dt). Solved without cancellation; it is C dx / (c + |v|) when g = 0.
-    const double speed = double(c) + double(state_.bounds.maxSpeed), g = settings_.gravity.norm(), reach = settings_.cfl * settings_.dx;
+    const double speed = double(c) + double(state_.bounds.maxSpeed), g = settings_.gravity.norm(),
+                 reach = settings_.cfl * settings_.dx;
     const double denominator = speed + std::sqrt(speed * speed + 4.0 * g * reach);
     return denominator > 0.0 ? 2.0 * reach / denominator : std::numeric_limits<double>::infinity();
 }

@@ -22,14 +22,14 @@
 namespace mpm {
 
 struct SimulationSettings {
-    double dx = 0.02;                         ///< grid spacing [m]
-    Vec3d gravity = Vec3d(0.0, -9.81, 0.0);   ///< Y is up, as in Houdini [m/s^2]
+    double dx = 0.02;                        ///< grid spacing [m]
+    Vec3d gravity = Vec3d(0.0, -9.81, 0.0);  ///< Y is up, as in Houdini [m/s^2]
     TransferSettings transfer;
     double fps = 24.0;
-    int substepsPerFrame = 20;                ///< target dt = 1 / (fps * substepsPerFrame)
-    bool adaptive = true;                     ///< also bound dt by the CFL condition
-    double cfl = 0.5;                         ///< C in dt <= C dx / (c + |v|max)
-    double maxDisplacement = 0.0;             ///< thesis rule: max node displacement per substep in cells; 0 = off
+    int substepsPerFrame = 20;     ///< target dt = 1 / (fps * substepsPerFrame)
+    bool adaptive = true;          ///< also bound dt by the CFL condition
+    double cfl = 0.5;              ///< C in dt <= C dx / (c + |v|max)
+    double maxDisplacement = 0.0;  ///< thesis rule: max node displacement per substep in cells; 0 = off
     StabilitySettings stability;
 
     double targetDt() const { return 1.0 / (fps * substepsPerFrame); }
@@ -43,8 +43,8 @@ struct Emitter {
     Vec3f velocity = Vec3f::Zero();
     float mass = 0.0f, volume = 0.0f;  ///< per particle
     int startFrame = 0;
-    int durationFrames = 1;            ///< emissions happen in [startFrame, startFrame + durationFrames)
-    int pauseFrames = 0;               ///< frames skipped between two emissions
+    int durationFrames = 1;  ///< emissions happen in [startFrame, startFrame + durationFrames)
+    int pauseFrames = 0;     ///< frames skipped between two emissions
 
     bool emitsAt(int frame) const {
         return frame >= startFrame && frame < startFrame + durationFrames && (frame - startFrame) % (pauseFrames + 1) == 0;
@@ -112,7 +112,8 @@ private:
     int runFrameSubsteps();
     void bin();
     float updateGrid(float dt);
-    template <class S> void permute(S& species, const std::vector<uint32_t>& destination);
+    template <class S>
+    void permute(S& species, const std::vector<uint32_t>& destination);
 
     // The model.
     SimulationSettings settings_;

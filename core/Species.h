@@ -13,16 +13,34 @@ namespace mpm {
 
 /// Attributes every particle has, whatever its material.
 struct ParticleArrays {
-    std::vector<Vec3d> x;         ///< position [m], double so that precision does not decay far from the origin
-    std::vector<Vec3f> v;         ///< velocity [m/s]
-    std::vector<Mat3f> C;         ///< APIC affine velocity C = B D^-1 [1/s]
-    std::vector<float> mass;      ///< [kg]
-    std::vector<float> volume0;   ///< reference volume V_p^0 [m^3]
-    std::vector<int32_t> id;      ///< stable identifier across frames
-    std::vector<uint16_t> set;    ///< index of the particle set that emitted it
+    std::vector<Vec3d> x;        ///< position [m], double so that precision does not decay far from the origin
+    std::vector<Vec3f> v;        ///< velocity [m/s]
+    std::vector<Mat3f> C;        ///< APIC affine velocity C = B D^-1 [1/s]
+    std::vector<float> mass;     ///< [kg]
+    std::vector<float> volume0;  ///< reference volume V_p^0 [m^3]
+    std::vector<int32_t> id;     ///< stable identifier across frames
+    std::vector<uint16_t> set;   ///< index of the particle set that emitted it
 
-    template <class F> void forEachArray(F&& f) { f(x); f(v); f(C); f(mass); f(volume0); f(id); f(set); }
-    template <class F> void forEachArray(F&& f) const { f(x); f(v); f(C); f(mass); f(volume0); f(id); f(set); }
+    template <class F>
+    void forEachArray(F&& f) {
+        f(x);
+        f(v);
+        f(C);
+        f(mass);
+        f(volume0);
+        f(id);
+        f(set);
+    }
+    template <class F>
+    void forEachArray(F&& f) const {
+        f(x);
+        f(v);
+        f(C);
+        f(mass);
+        f(volume0);
+        f(id);
+        f(set);
+    }
     std::size_t size() const { return x.size(); }
 };
 
@@ -38,14 +56,24 @@ struct Species {
     /// rebuilds it before every use).
     std::vector<uint32_t> leafStart;
 
-    template <class F> void forEachArray(F&& f) { p.forEachArray(f); state.forEachArray(f); }
-    template <class F> void forEachArray(F&& f) const { p.forEachArray(f); state.forEachArray(f); }
+    template <class F>
+    void forEachArray(F&& f) {
+        p.forEachArray(f);
+        state.forEachArray(f);
+    }
+    template <class F>
+    void forEachArray(F&& f) const {
+        p.forEachArray(f);
+        state.forEachArray(f);
+    }
     std::size_t size() const { return p.size(); }
 };
 
 /// The closed set of species types, one per material in materials/Materials.h, and of their parameters.
-template <class List> struct SpeciesVariantOf;
-template <class... Ms> struct SpeciesVariantOf<MaterialList<Ms...>> {
+template <class List>
+struct SpeciesVariantOf;
+template <class... Ms>
+struct SpeciesVariantOf<MaterialList<Ms...>> {
     using type = std::variant<Species<Ms>...>;
     using params = std::variant<typename Ms::Params...>;
 };
@@ -54,7 +82,9 @@ using AnySpecies = SpeciesVariantOf<AllMaterials>::type;
 using AnyMaterialParams = SpeciesVariantOf<AllMaterials>::params;
 
 /// Common attributes of any species, without knowing its material.
-inline ParticleArrays& particlesOf(AnySpecies& s) { return std::visit([](auto& sp) -> ParticleArrays& { return sp.p; }, s); }
+inline ParticleArrays& particlesOf(AnySpecies& s) {
+    return std::visit([](auto& sp) -> ParticleArrays& { return sp.p; }, s);
+}
 inline const ParticleArrays& particlesOf(const AnySpecies& s) {
     return std::visit([](const auto& sp) -> const ParticleArrays& { return sp.p; }, s);
 }

@@ -7,7 +7,8 @@ namespace mpm {
 namespace {
 
 float volumeRatioOf(const SimState& state, int s, std::size_t i) {
-    return std::visit([&](const auto& sp) { return std::decay_t<decltype(sp)>::Material::volumeRatio(sp.state, i); }, state.species[s]);
+    return std::visit([&](const auto& sp) { return std::decay_t<decltype(sp)>::Material::volumeRatio(sp.state, i); },
+                      state.species[s]);
 }
 
 std::pair<int, std::size_t> fastestParticle(const SimState& state) {
@@ -62,7 +63,8 @@ void StabilityGuard::checkSubstep(const SimState& state, const G2PSummary& g2p, 
     if (settings_.cellCrossing && double(g2p.maxSpeed) * dt > dx) {
         const auto [s, i] = fastestParticle(state);
         std::ostringstream cause;
-        cause << "particle moved " << double(g2p.maxSpeed) * dt / dx << " cells in one substep (speed " << g2p.maxSpeed << " m/s)";
+        cause << "particle moved " << double(g2p.maxSpeed) * dt / dx << " cells in one substep (speed " << g2p.maxSpeed
+              << " m/s)";
         failAt(state, cause.str(), s, i, dt);
     }
     // A material crushed (or a particle flung) far past anything physical makes the CFL step collapse and

@@ -14,7 +14,7 @@
 namespace mpm {
 
 struct StabilitySettings {
-    bool cellCrossing = true;   ///< a particle moving more than one cell in a substep breaks the stencil
+    bool cellCrossing = true;  ///< a particle moving more than one cell in a substep breaks the stencil
     /// Total energy (kinetic + stored + gravity) may not rise above its lowest value since the last emission
     /// by more than this fraction of the largest kinetic + stored energy seen; 0 = off. Colliders are static
     /// and dissipative, so without emission nothing does positive work.
@@ -22,7 +22,7 @@ struct StabilitySettings {
     /// The CFL step may not shrink by more than this factor in one substep (a crushed material or a flung
     /// particle makes the step collapse and the run stall); 0 = off.
     double stepCollapse = 100.0;
-    int retries = 0;            ///< restarts of a failed frame, each halving the time step; 0 = stop at once
+    int retries = 0;  ///< restarts of a failed frame, each halving the time step; 0 = stop at once
 };
 
 /// A blow-up or invalid state found during a substep; the message names frame, substep, particle and field.
@@ -34,7 +34,8 @@ public:
 class StabilityGuard {
 public:
     /// gravity and dx set the energy floor of a body at rest: its weight over one cell.
-    StabilityGuard(const StabilitySettings& settings, double gravity, double dx) : settings_(settings), gravity_(gravity), dx_(dx) {}
+    StabilityGuard(const StabilitySettings& settings, double gravity, double dx)
+        : settings_(settings), gravity_(gravity), dx_(dx) {}
 
     const StabilitySettings& settings() const { return settings_; }
     /// Factor on the CFL step: 1, halved on each retry of the current frame.
@@ -42,7 +43,8 @@ public:
 
     /// After G2P, with the state's bounds already those G2P found; cflBefore and cflAfter are the CFL steps
     /// from the bounds before and after.
-    void checkSubstep(const SimState& state, const G2PSummary& g2p, double dt, double dx, double cflBefore, double cflAfter) const;
+    void checkSubstep(const SimState& state, const G2PSummary& g2p, double dt, double dx, double cflBefore,
+                      double cflAfter) const;
 
     /// Energy is checked inside a frame every kEnergyCheckInterval substeps (frame ends always).
     bool energyCheckDue(long long substeps) const { return settings_.energyGrowth > 0.0 && substeps % kEnergyCheckInterval == 0; }

@@ -36,7 +36,8 @@ struct LocalBlock {
     /// stencil rather than the N^3 block. Crowded leaves skip the scan and take the whole block.
     static Range reach(const std::vector<AnySpecies>& species, uint32_t l, const Vec3i& origin, double dx) {
         std::size_t count = 0;
-        for (const AnySpecies& s : species) std::visit([&](const auto& sp) { count += sp.leafStart[l + 1] - sp.leafStart[l]; }, s);
+        for (const AnySpecies& s : species)
+            std::visit([&](const auto& sp) { count += sp.leafStart[l + 1] - sp.leafStart[l]; }, s);
         if (count > kFewParticles) return Range{{0, 0, 0}, {N, N, N}};
         Range r{{N, N, N}, {0, 0, 0}};
         const double invDx = 1.0 / dx;
@@ -60,8 +61,10 @@ struct LocalBlock {
     template <class F>
     static void forEachNode(const SparseGrid& grid, uint32_t l, const Range& r, F&& f) {
         // The whole block with constant bounds, which the compiler unrolls; a part of it with the range's.
-        if (whole(r)) visit(grid, l, Range{{0, 0, 0}, {N, N, N}}, f, std::true_type{});
-        else visit(grid, l, r, f, std::false_type{});
+        if (whole(r))
+            visit(grid, l, Range{{0, 0, 0}, {N, N, N}}, f, std::true_type{});
+        else
+            visit(grid, l, r, f, std::false_type{});
     }
     template <class F, bool Whole>
     static void visit(const SparseGrid& grid, uint32_t l, const Range& r, F& f, std::bool_constant<Whole>) {
@@ -219,7 +222,8 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
         for (int d = 1; d < kNeighbours; ++d) v += volume(halo(i, d));
         return v;
     };
-    forEachLeaf(P, LeafGrain::Particles, [&](std::size_t i) { range[i] = B::reach(species, leaves[i], grid.leaf(leaves[i]).origin, grid.dx()); });
+    forEachLeaf(P, LeafGrain::Particles,
+                [&](std::size_t i) { range[i] = B::reach(species, leaves[i], grid.leaf(leaves[i]).origin, grid.dx()); });
     const std::size_t total =
         prefixSumOverLeaves<std::size_t>(P, haloVolume, [&](std::size_t i, std::size_t sum) { offset[i] = sum; });
     std::vector<float>& scratch = grid.transferScratch();
@@ -232,14 +236,18 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
         const Range& r = range[i];
         const LeafView& leaf = grid.leaf(l);
         f4 block[B::kNodes];
-        if (B::whole(r)) std::memset(static_cast<void*>(block), 0, sizeof(block));
+        if (B::whole(r))
+            std::memset(static_cast<void*>(block), 0, sizeof(block));
         else
             for (int a = r.lo[0]; a < r.hi[0]; ++a)
                 for (int b = r.lo[1]; b < r.hi[1]; ++b)
                     std::memset(static_cast<void*>(block + B::index(a, b, r.lo[2])), 0, sizeof(f4) * (r.hi[2] - r.lo[2]));
         for (AnySpecies& s : species)
-            std::visit([&](auto& sp) { scatterSpecies<K, MLS>(sp, sp.leafStart[l], sp.leafStart[l + 1], leaf.origin, grid.dx(), dt, block); },
-                       s);
+            std::visit(
+                [&](auto& sp) {
+                    scatterSpecies<K, MLS>(sp, sp.leafStart[l], sp.leafStart[l + 1], leaf.origin, grid.dx(), dt, block);
+                },
+                s);
         const Range own = part(r, 0);
         if (volume(own) < std::size_t(kLeafNodes)) zero(leaf, grid.writtenBox(l));  // what the last substep left
         for (int a = own.lo[0]; a < own.hi[0]; ++a)
@@ -268,8 +276,10 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
         const LeafView& leaf = grid.leaf(g);
         const std::array<uint32_t, kNeighbours>& src = grid.sources(g);
         NodeBox written;
-        if (src[0] == SparseGrid::kNoLeaf) zero(leaf, grid.writtenBox(g));  // no particles of its own: pass 1 did not write it
-        else written = box(part(range[src[0]], 0), 0);
+        if (src[0] == SparseGrid::kNoLeaf)
+            zero(leaf, grid.writtenBox(g));  // no particles of its own: pass 1 did not write it
+        else
+            written = box(part(range[src[0]], 0), 0);
         for (int d = 1; d < kNeighbours; ++d) {
             if (src[d] == SparseGrid::kNoLeaf) continue;
             const f4* in = halos + partStart[src[d]][d];
@@ -295,8 +305,8 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
 ///   v = sum w v_i,  B = sum w v_i d^T (eq. 3.18),  grad v = sum v_i grad w^T (eq. 3.19),
 /// axis by axis: the k sums first, then j, then i, so each node costs three vector FMAs.
 template <class K, bool MLS, class Sp>
-void gatherSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, double dx, float dt, bool apic,
-                   const f4* vel, float& maxSpeed, float& minKey, G2PSummary& bad, int speciesIndex) {
+void gatherSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, double dx, float dt, bool apic, const f4* vel,
+                   float& maxSpeed, float& minKey, G2PSummary& bad, int speciesIndex) {
     using M = typename Sp::Material;
     constexpr int W = K::kWidth;
     const double invDx = 1.0 / dx;
@@ -373,8 +383,8 @@ void gatherSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, do
 }
 
 template <class K, bool MLS>
-void gatherLeaf(const SparseGrid& grid, std::vector<AnySpecies>& species, uint32_t l, float dt, bool apic,
-                float& maxSpeed, float* minKey, G2PSummary& bad) {
+void gatherLeaf(const SparseGrid& grid, std::vector<AnySpecies>& species, uint32_t l, float dt, bool apic, float& maxSpeed,
+                float* minKey, G2PSummary& bad) {
     using B = LocalBlock<K>;
     f4 vel[B::kNodes];
     const Vec3i origin = grid.leaf(l).origin;

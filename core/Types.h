@@ -13,7 +13,9 @@ using Vec3d = Eigen::Vector3d;
 using Vec3i = Eigen::Vector3i;
 using Mat3f = Eigen::Matrix3f;
 using Mat3d = Eigen::Matrix3d;
-template <class T> using Mat3T = Eigen::Matrix<T, 3, 3>;
-template <class T> using Vec3T = Eigen::Matrix<T, 3, 1>;
+template <class T>
+using Mat3T = Eigen::Matrix<T, 3, 3>;
+template <class T>
+using Vec3T = Eigen::Matrix<T, 3, 1>;
 
 }  // namespace mpm

@@ -25,18 +25,24 @@ std::vector<SurfaceGroup> surfaceGroups(const std::string& grouping, const Speci
         return {g};
     }
     for (std::size_t s = 0; s < species; ++s) {
-        const std::string key = grouping == "set" ? layout.setNames[layout.setOfSpecies[s]]
-                                                  : materialSceneNames()[layout.materialOfSpecies[s]];
-        auto it = std::find_if(groups.begin(), groups.end(), [&](const SurfaceGroup& g) { return g.gridName == "surface_" + key; });
-        if (it == groups.end()) groups.push_back(SurfaceGroup{"surface_" + key, {int(s)}});
-        else it->species.push_back(int(s));
+        const std::string key =
+            grouping == "set" ? layout.setNames[layout.setOfSpecies[s]] : materialSceneNames()[layout.materialOfSpecies[s]];
+        auto it =
+            std::find_if(groups.begin(), groups.end(), [&](const SurfaceGroup& g) { return g.gridName == "surface_" + key; });
+        if (it == groups.end())
+            groups.push_back(SurfaceGroup{"surface_" + key, {int(s)}});
+        else
+            it->species.push_back(int(s));
     }
     return groups;
 }
 }  // namespace
 
 FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory)
-    : name_(scene.name), output_(scene.output), layout_(layout), surfaces_(surfaceGroups(scene.output.surfaceGroup, layout)),
+    : name_(scene.name),
+      output_(scene.output),
+      layout_(layout),
+      surfaces_(surfaceGroups(scene.output.surfaceGroup, layout)),
       dir_(directory) {
     // The surface resolves the particle spacing of the first set; the sphere radius is a multiple of it.
     const double particlesPerCell = scene.sets.empty() ? 8.0 : scene.sets.front().particlesPerCell;

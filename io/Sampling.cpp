@@ -19,7 +19,8 @@ std::vector<Vec3d> jitteredGrid(const Shape& shape, double spacing, double jitte
     for (int i = 0; i < n[0]; ++i)
         for (int j = 0; j < n[1]; ++j)
             for (int k = 0; k < n[2]; ++k) {
-                const Vec3d x = lo + (Vec3d(i, j, k) + Vec3d::Constant(0.5)) * spacing + Vec3d(jitter(rng), jitter(rng), jitter(rng));
+                const Vec3d x =
+                    lo + (Vec3d(i, j, k) + Vec3d::Constant(0.5)) * spacing + Vec3d(jitter(rng), jitter(rng), jitter(rng));
                 if (shape.contains(x)) out.push_back(x);
             }
     return out;
@@ -86,7 +87,8 @@ std::vector<Vec3d> poissonDiskIn(const Shape& shape, double r, unsigned seed) {
 }
 
 template <class Shape>
-std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCell, long long count, Sampling method, unsigned seed) {
+std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCell, long long count, Sampling method,
+                            unsigned seed) {
     const double perVolume = count > 0 ? double(count) / shape.volume() : particlesPerCell / (dx * dx * dx);
     std::vector<Vec3d> pts;
     if (method != Sampling::Poisson) {

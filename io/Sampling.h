@@ -14,8 +14,8 @@ inline constexpr int kPoissonAttempts = 30;
 
 /// Samples the shape. With count > 0 exactly count points are returned (a random subset of a denser
 /// sampling, which keeps the minimum spacing); otherwise particlesPerCell sets the density.
-std::vector<Vec3d> sampleShape(const SetShape& shape, double dx, double particlesPerCell, long long count,
-                               Sampling method, unsigned seed);
+std::vector<Vec3d> sampleShape(const SetShape& shape, double dx, double particlesPerCell, long long count, Sampling method,
+                               unsigned seed);
 
 /// Poisson-disk samples with minimum distance r inside the shape.
 std::vector<Vec3d> poissonDisk(const SetShape& shape, double r, unsigned seed);

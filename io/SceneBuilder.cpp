@@ -24,14 +24,15 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene) {
         AnyMaterialParams params = d.params;
         visitMaterialParams(params, [&]<class M>(typename M::Params& p) { M::scaleStiffness(p, d.lambdaScale, d.muScale); });
         const int species = sim->addSpecies(makeSpecies(d.name, params));
-        if (species != layout.speciesOfSet[i]) throw std::logic_error("buildSimulation: species order differs from speciesLayout");
+        if (species != layout.speciesOfSet[i])
+            throw std::logic_error("buildSimulation: species order differs from speciesLayout");
         Emitter e;
         e.species = species;
         e.set = uint16_t(i);
         e.positions = sampleShape(d.shape, scene.settings.dx, d.particlesPerCell, d.count, d.sampling, d.seed);
         if (e.positions.empty())
-            throw SceneError(scene.file + ": /sets/" + std::to_string(i) + "/shape: no particle fits in the shape at dx = " +
-                             std::to_string(scene.settings.dx));
+            throw SceneError(scene.file + ": /sets/" + std::to_string(i) +
+                             "/shape: no particle fits in the shape at dx = " + std::to_string(scene.settings.dx));
         e.velocity = d.velocity;
         e.volume = float(shapeVolume(d.shape) / double(e.positions.size()));
         const float density = std::visit([](const auto& p) { return p.density; }, params);

@@ -42,22 +42,22 @@ struct ColliderDesc {
 
 struct OutputDesc {
     std::string directory = "out";
-    bool points = true;         ///< VDB PointDataGrid "points"
-    bool surface = true;        ///< narrow-band level set "surface"
-    bool density = false;       ///< fog volume "density"
-    bool velocity = false;      ///< vector grid "vel"
-    bool splitFiles = false;    ///< points in <scene>_points_NNNN.vdb, volumes in <scene>_NNNN.vdb
-    bool ply = false;           ///< binary PLY per frame (Blender reads it)
-    double surfaceRadius = 1.0; ///< sphere radius in particle spacings
+    bool points = true;                ///< VDB PointDataGrid "points"
+    bool surface = true;               ///< narrow-band level set "surface"
+    bool density = false;              ///< fog volume "density"
+    bool velocity = false;             ///< vector grid "vel"
+    bool splitFiles = false;           ///< points in <scene>_points_NNNN.vdb, volumes in <scene>_NNNN.vdb
+    bool ply = false;                  ///< binary PLY per frame (Blender reads it)
+    double surfaceRadius = 1.0;        ///< sphere radius in particle spacings
     std::string surfaceGroup = "all";  ///< all | material | set: one surface grid per group
 };
 
 struct SceneDesc {
-    std::string file;    ///< path it was read from
-    std::string name;    ///< file stem, used in output names
+    std::string file;  ///< path it was read from
+    std::string name;  ///< file stem, used in output names
     SimulationSettings settings;
     int frames = 48;
-    int threads = 0;     ///< 0 = all cores
+    int threads = 0;  ///< 0 = all cores
     OutputDesc output;
     std::vector<ParticleSetDesc> sets;
     std::vector<ColliderDesc> colliders;

@@ -30,9 +30,13 @@ public:
         out_ << "| key | default | allowed | meaning |\n|---|---|---|---|\n";
     }
     template <class T>
-    void number(const Key& k, T& value) { row(k, formatValue(double(value)), range(k)); }
+    void number(const Key& k, T& value) {
+        row(k, formatValue(double(value)), range(k));
+    }
     template <class T>
-    void integer(const Key& k, T& value) { row(k, std::to_string(static_cast<long long>(value)), range(k, true)); }
+    void integer(const Key& k, T& value) {
+        row(k, std::to_string(static_cast<long long>(value)), range(k, true));
+    }
     void flag(const Key& k, bool& value) { row(k, value ? "true" : "false", "true, false"); }
     template <class T>
     void vec3(const Key& k, Eigen::Matrix<T, 3, 1>& v) {
@@ -58,7 +62,10 @@ private:
     static std::string range(const Key& k, bool integer = false) {
         auto bound = [&](double b) { return integer ? std::to_string(static_cast<long long>(b)) : formatValue(b); };
         const bool lo = std::isfinite(k.lo), hi = std::isfinite(k.hi);
-        std::string r = lo && hi ? bound(k.lo) + " .. " + bound(k.hi) : lo ? ">= " + bound(k.lo) : hi ? "<= " + bound(k.hi) : "any";
+        std::string r = lo && hi ? bound(k.lo) + " .. " + bound(k.hi)
+                        : lo     ? ">= " + bound(k.lo)
+                        : hi     ? "<= " + bound(k.hi)
+                                 : "any";
         if (lo && k.lo == kTiny) r = hi && k.hi == kHuge ? "> 0" : "> 0 .. " + bound(k.hi);
         return r;
     }
@@ -66,7 +73,8 @@ private:
         // A unit in parentheses is an explanation for error messages; the help text already says it.
         const bool showUnit = !k.unit.empty() && k.unit[0] != '(' && k.help.find(k.unit) == std::string_view::npos;
         const std::string unit = showUnit ? " [" + std::string(k.unit) + "]" : "";
-        out_ << "| " << k.name << " | " << (k.required ? "required" : def) << " | " << allowed << " | " << k.help << unit << " |\n";
+        out_ << "| " << k.name << " | " << (k.required ? "required" : def) << " | " << allowed << " | " << k.help << unit
+             << " |\n";
     }
     std::ostringstream& out_;
 };
@@ -106,7 +114,8 @@ std::string explainSceneFormat() {
         MarkdownKeys v(out);
         outputKeys(v, defaults.output);
     }
-    out << "\n## sets\n\nA list of particle sets; each is one species, sampled in its shape and emitted whole at its emission frames.\n"
+    out << "\n## sets\n\nA list of particle sets; each is one species, sampled in its shape and emitted whole at its emission "
+           "frames.\n"
            "Particle volume is the shape's volume divided by the particle count; mass is volume times density.\n\n";
     {
         ParticleSetDesc set;

@@ -8,11 +8,14 @@
 
 namespace mpm {
 
-inline constexpr Named<Interpolation> kInterpolations[] = {{Interpolation::Quadratic, "quadratic"}, {Interpolation::Cubic, "cubic"}};
+inline constexpr Named<Interpolation> kInterpolations[] = {{Interpolation::Quadratic, "quadratic"},
+                                                           {Interpolation::Cubic, "cubic"}};
 inline constexpr Named<TransferScheme> kTransfers[] = {{TransferScheme::APIC, "apic"}, {TransferScheme::PIC, "pic"}};
 inline constexpr Named<ForceScheme> kForces[] = {{ForceScheme::Standard, "standard"}, {ForceScheme::MLS, "mls"}};
-inline constexpr Named<Boundary> kBoundaries[] = {{Boundary::Sticky, "sticky"}, {Boundary::Slip, "slip"}, {Boundary::Separate, "separate"}};
-inline constexpr Named<Sampling> kSamplings[] = {{Sampling::Poisson, "poisson"}, {Sampling::Grid, "grid"}, {Sampling::Lattice, "lattice"}};
+inline constexpr Named<Boundary> kBoundaries[] = {
+    {Boundary::Sticky, "sticky"}, {Boundary::Slip, "slip"}, {Boundary::Separate, "separate"}};
+inline constexpr Named<Sampling> kSamplings[] = {
+    {Sampling::Poisson, "poisson"}, {Sampling::Grid, "grid"}, {Sampling::Lattice, "lattice"}};
 
 template <class V>
 void simulationKeys(V& v, SceneDesc& d) {
@@ -28,33 +31,45 @@ void simulationKeys(V& v, SceneDesc& d) {
              std::span<const Named<Interpolation>>(kInterpolations));
     v.choice(Key{.name = "transfer", .help = "velocity transfer (PIC is dissipative)", .noun = "transfer"}, s.transfer.transfer,
              std::span<const Named<TransferScheme>>(kTransfers));
-    v.choice(Key{.name = "force", .help = "stress force: grad w (thesis 3.24) or MLS-MPM fused (Hu et al. 2018)", .noun = "force"},
-             s.transfer.force, std::span<const Named<ForceScheme>>(kForces));
-    v.number(Key{.name = "cfl", .help = "C in dt <= C dx / (c + max speed), c the fastest wave speed", .lo = 1e-3, .hi = 10.0}, s.cfl);
+    v.choice(
+        Key{.name = "force", .help = "stress force: grad w (thesis 3.24) or MLS-MPM fused (Hu et al. 2018)", .noun = "force"},
+        s.transfer.force, std::span<const Named<ForceScheme>>(kForces));
+    v.number(Key{.name = "cfl", .help = "C in dt <= C dx / (c + max speed), c the fastest wave speed", .lo = 1e-3, .hi = 10.0},
+             s.cfl);
     v.flag(Key{.name = "adaptive", .help = "apply the CFL bound (off: the fixed target dt)"}, s.adaptive);
     v.number(Key{.name = "max_displacement",
                  .help = "thesis rule: largest grid-node displacement per substep in cells; 0 = off",
-                 .lo = 0.0, .hi = 100.0, .unit = "cells per substep"},
+                 .lo = 0.0,
+                 .hi = 100.0,
+                 .unit = "cells per substep"},
              s.maxDisplacement);
-    v.integer(Key{.name = "threads", .help = "worker threads; 0 = all cores (`--threads` overrides)", .lo = 0, .hi = 4096}, d.threads);
+    v.integer(Key{.name = "threads", .help = "worker threads; 0 = all cores (`--threads` overrides)", .lo = 0, .hi = 4096},
+              d.threads);
     v.number(Key{.name = "energy_growth_limit",
                  .help = "blow-up check: total energy (kinetic + stored + gravity) may not rise above its lowest value since the "
                          "last emission by more than this fraction of the largest kinetic + stored energy seen; 0 = off",
-                 .lo = 0.0, .hi = 1e6, .unit = "(fraction of the largest kinetic + stored energy; 0 = off)"},
+                 .lo = 0.0,
+                 .hi = 1e6,
+                 .unit = "(fraction of the largest kinetic + stored energy; 0 = off)"},
              b.energyGrowth);
-    v.flag(Key{.name = "cell_crossing_check", .help = "blow-up check: stop when a particle moves more than one cell in a substep"},
-           b.cellCrossing);
+    v.flag(
+        Key{.name = "cell_crossing_check", .help = "blow-up check: stop when a particle moves more than one cell in a substep"},
+        b.cellCrossing);
     v.number(Key{.name = "step_collapse_limit",
                  .help = "blow-up check: stop when the CFL time step shrinks by more than this factor in one substep (a crushed "
                          "material or a flung particle would stall the run); 0 = off",
-                 .lo = 0.0, .hi = 1e12, .unit = "(largest factor by which the CFL step may shrink in one substep; 0 = off)"},
+                 .lo = 0.0,
+                 .hi = 1e12,
+                 .unit = "(largest factor by which the CFL step may shrink in one substep; 0 = off)"},
              b.stepCollapse);
-    v.integer(Key{.name = "retries",
-                  .help = "when a check fires (these three, a non-finite value, neo-Hookean J <= 0): 0 stops the run naming cause, "
-                          "frame, substep and particle; N restarts the frame up to N times, halving the time step each time "
-                          "(counted in stats.csv `retries`)",
-                  .lo = 0, .hi = 10},
-              b.retries);
+    v.integer(
+        Key{.name = "retries",
+            .help = "when a check fires (these three, a non-finite value, neo-Hookean J <= 0): 0 stops the run naming cause, "
+                    "frame, substep and particle; N restarts the frame up to N times, halving the time step each time "
+                    "(counted in stats.csv `retries`)",
+            .lo = 0,
+            .hi = 10},
+        b.retries);
 }
 
 template <class V>
@@ -64,13 +79,20 @@ void outputKeys(V& v, OutputDesc& o) {
     v.flag(Key{.name = "surface", .help = "narrow-band level set `surface` from the particles"}, o.surface);
     v.flag(Key{.name = "density", .help = "fog volume `density` (from the surface)"}, o.density);
     v.flag(Key{.name = "velocity", .help = "vector grid `vel` (mean particle velocity per voxel)"}, o.velocity);
-    v.flag(Key{.name = "split_files",
-               .help = "points in `<scene>_points_NNNN.vdb`, volumes in `<scene>_NNNN.vdb` (Blender and pyopenvdb cannot read points)"},
-           o.splitFiles);
+    v.flag(
+        Key{.name = "split_files",
+            .help =
+                "points in `<scene>_points_NNNN.vdb`, volumes in `<scene>_NNNN.vdb` (Blender and pyopenvdb cannot read points)"},
+        o.splitFiles);
     v.flag(Key{.name = "ply", .help = "binary PLY `<scene>_NNNN.ply` with x, y, z, vx, vy, vz, id (Blender imports it)"}, o.ply);
-    v.number(Key{.name = "surface_radius", .help = "radius of the particles' spheres", .lo = 0.5, .hi = 10.0, .unit = "particle spacings"},
+    v.number(Key{.name = "surface_radius",
+                 .help = "radius of the particles' spheres",
+                 .lo = 0.5,
+                 .hi = 10.0,
+                 .unit = "particle spacings"},
              o.surfaceRadius);
-    v.choice(Key{.name = "surface_group", .help = "one `surface` grid, or `surface_<material>` / `surface_<set>` per group",
+    v.choice(Key{.name = "surface_group",
+                 .help = "one `surface` grid, or `surface_<material>` / `surface_<set>` per group",
                  .noun = "surface grouping"},
              o.surfaceGroup, std::vector<std::string>{"all", "material", "set"});
 }
@@ -83,15 +105,20 @@ void setKeys(V& v, ParticleSetDesc& d) {
     v.vec3(Key{.name = "velocity", .help = "initial velocity", .unit = "m/s"}, d.velocity);
     v.number(Key{.name = "particles_per_cell", .help = "sampling density in particles per dx^3", .lo = 1e-3, .hi = 1000.0},
              d.particlesPerCell);
-    v.integer(Key{.name = "count", .help = "exact particle count (overrides particles_per_cell when > 0)", .lo = 0, .hi = 2e9}, d.count);
+    v.integer(Key{.name = "count", .help = "exact particle count (overrides particles_per_cell when > 0)", .lo = 0, .hi = 2e9},
+              d.count);
     v.choice(Key{.name = "sampling",
                  .help = "Bridson Poisson-disk, a jittered lattice, or a regular lattice (for validation)",
                  .noun = "sampling"},
              d.sampling, std::span<const Named<Sampling>>(kSamplings));
     v.integer(Key{.name = "start_frame", .help = "first emission", .lo = 0, .hi = 1e8}, d.startFrame);
-    v.integer(Key{.name = "duration", .help = "emissions happen during [start_frame, start_frame + duration)", .lo = 1, .hi = 1e8},
-              d.durationFrames);
-    v.integer(Key{.name = "pause", .help = "frames skipped between two emissions (a stream: 0; repeated throws: > 0)", .lo = 0, .hi = 1e8},
+    v.integer(
+        Key{.name = "duration", .help = "emissions happen during [start_frame, start_frame + duration)", .lo = 1, .hi = 1e8},
+        d.durationFrames);
+    v.integer(Key{.name = "pause",
+                  .help = "frames skipped between two emissions (a stream: 0; repeated throws: > 0)",
+                  .lo = 0,
+                  .hi = 1e8},
               d.pauseFrames);
     v.number(Key{.name = "lambda_scale", .help = "scales the preset's lambda (water: its bulk modulus k)", .lo = 0.0, .hi = 1e6},
              d.lambdaScale);

@@ -54,8 +54,8 @@ public:
             if (!j->is_number()) fail(k.name, "expected a number, got " + j->dump());
             v = j->get<double>();
             if (!std::isfinite(v) || v < k.lo || v > k.hi)
-                fail(k.name, "value " + formatNumber(v) + " out of range; allowed: " + formatNumber(k.lo) + " to " + formatNumber(k.hi) +
-                                 (k.unit.empty() ? "" : " " + std::string(k.unit)));
+                fail(k.name, "value " + formatNumber(v) + " out of range; allowed: " + formatNumber(k.lo) + " to " +
+                                 formatNumber(k.hi) + (k.unit.empty() ? "" : " " + std::string(k.unit)));
         }
         out_[std::string(k.name)] = v;
         value = T(v);
@@ -67,8 +67,8 @@ public:
             if (!j->is_number_integer()) fail(k.name, "expected an integer, got " + j->dump());
             v = j->get<long long>();
             if (double(v) < k.lo || double(v) > k.hi)
-                fail(k.name, "value " + std::to_string(v) + " out of range; allowed: " + std::to_string((long long)k.lo) + " to " +
-                                 std::to_string((long long)k.hi));
+                fail(k.name, "value " + std::to_string(v) + " out of range; allowed: " + std::to_string((long long)k.lo) +
+                                 " to " + std::to_string((long long)k.hi));
         }
         out_[std::string(k.name)] = v;
         value = T(v);
@@ -137,7 +137,8 @@ public:
         if (!j) return items;
         if (!j->is_array()) fail(key, "expected a list of objects");
         for (std::size_t i = 0; i < j->size(); ++i) out_[key].push_back(json::object());
-        for (std::size_t i = 0; i < j->size(); ++i) items.emplace_back((*j)[i], out_[key][i], path_ + "/" + key + "/" + std::to_string(i), file_);
+        for (std::size_t i = 0; i < j->size(); ++i)
+            items.emplace_back((*j)[i], out_[key][i], path_ + "/" + key + "/" + std::to_string(i), file_);
         return items;
     }
     /// Unknown keys are errors: a typo must not silently fall back to a default.

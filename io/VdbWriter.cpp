@@ -25,8 +25,10 @@ struct ArrayView {
     using value_type = VdbT;
     const std::vector<T>& data;
     static VdbT convert(const T& a) {
-        if constexpr (std::is_arithmetic_v<T>) return VdbT(a);
-        else return VdbT(a[0], a[1], a[2]);
+        if constexpr (std::is_arithmetic_v<T>)
+            return VdbT(a);
+        else
+            return VdbT(a[0], a[1], a[2]);
     }
     std::size_t size() const { return data.size(); }
     void getPos(std::size_t n, VdbT& xyz) const { xyz = convert(data[n]); }
@@ -35,10 +37,12 @@ struct ArrayView {
 };
 
 template <class VdbT, class Codec = openvdb::points::NullCodec, class T>
-void addAttribute(PointDataGrid& grid, const openvdb::tools::PointIndexGrid& index, const char* name, const std::vector<T>& values) {
+void addAttribute(PointDataGrid& grid, const openvdb::tools::PointIndexGrid& index, const char* name,
+                  const std::vector<T>& values) {
     openvdb::points::appendAttribute<VdbT, Codec>(grid.tree(), name);
     const ArrayView<VdbT, T> view{values};
-    openvdb::points::populateAttribute<openvdb::points::PointDataTree, openvdb::tools::PointIndexTree>(grid.tree(), index.tree(), name, view);
+    openvdb::points::populateAttribute<openvdb::points::PointDataTree, openvdb::tools::PointIndexTree>(grid.tree(), index.tree(),
+                                                                                                       name, view);
 }
 
 /// Points with P (16-bit fixed point, as Houdini writes them) and, when full, v, id, material and set.
@@ -46,7 +50,8 @@ PointDataGrid::Ptr makePoints(const PointCloud& f, double voxelSize, bool full) 
     const auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
     const ArrayView<openvdb::Vec3d, Vec3d> positions{f.x};
     auto index = openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(positions, *xform);
-    auto grid = openvdb::points::createPointDataGrid<openvdb::points::FixedPointCodec<false>, PointDataGrid>(*index, positions, *xform);
+    auto grid =
+        openvdb::points::createPointDataGrid<openvdb::points::FixedPointCodec<false>, PointDataGrid>(*index, positions, *xform);
     if (full) {
         addAttribute<openvdb::Vec3s>(*grid, *index, "v", f.v);
         addAttribute<int32_t>(*grid, *index, "id", f.id);

@@ -16,12 +16,12 @@ struct SurfaceGroup {
 };
 
 struct VdbFrameRequest {
-    std::string volumePath;    ///< file for surface/density/vel (and points unless pointsPath is set)
-    std::string pointsPath;    ///< separate file for points, empty to keep them with the volumes
+    std::string volumePath;  ///< file for surface/density/vel (and points unless pointsPath is set)
+    std::string pointsPath;  ///< separate file for points, empty to keep them with the volumes
     bool points = true, surface = true, density = false, velocity = false;
-    double pointVoxelSize = 0.02;    ///< VDB points voxel (Houdini's default is ~8 points per voxel)
+    double pointVoxelSize = 0.02;  ///< VDB points voxel (Houdini's default is ~8 points per voxel)
     double surfaceVoxelSize = 0.01;
-    double surfaceRadius = 0.01;     ///< world-space sphere radius
+    double surfaceRadius = 0.01;  ///< world-space sphere radius
     std::vector<SurfaceGroup> surfaces;
     std::vector<std::string> materialNames, setNames;  ///< what the cloud's material and set indices mean
 };

@@ -60,8 +60,14 @@ struct ElasticParams {
 /// Per-particle state of those models: F alone, updated by F <- (I + dt grad v) F (thesis 3.19).
 struct DeformationGradientState {
     std::vector<Mat3f> F;
-    template <class Fn> void forEachArray(Fn&& f) { f(F); }
-    template <class Fn> void forEachArray(Fn&& f) const { f(F); }
+    template <class Fn>
+    void forEachArray(Fn&& f) {
+        f(F);
+    }
+    template <class Fn>
+    void forEachArray(Fn&& f) const {
+        f(F);
+    }
     void appendRest(std::size_t n) { F.resize(F.size() + n, Mat3f::Identity()); }
     void update(std::size_t i, const Mat3f& gradV, float dt) { F[i] = (Mat3f::Identity() + dt * gradV) * F[i]; }
 };

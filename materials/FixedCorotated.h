@@ -19,7 +19,9 @@ struct FixedCorotated {
     using State = DeformationGradientState;
 
     template <class V>
-    static void keys(V& v, Params& p) { elasticKeys(v, p.density, p.mu, p.lambda, kThesisElastic); }
+    static void keys(V& v, Params& p) {
+        elasticKeys(v, p.density, p.mu, p.lambda, kThesisElastic);
+    }
     static void scaleStiffness(Params& p, double lambdaScale, double muScale) { scaleLame(p.mu, p.lambda, lambdaScale, muScale); }
 
     template <class T>
@@ -36,7 +38,9 @@ struct FixedCorotated {
         return T(2) * mu * (F - R) * F.transpose() + lambda * (J - T(1)) * J * Mat3T<T>::Identity();
     }
     template <class T>
-    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) { return kirchhoffOf<T>(mu, lambda, F, svd3<T>(F)); }
+    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) {
+        return kirchhoffOf<T>(mu, lambda, F, svd3<T>(F));
+    }
     template <class T>
     static Mat3T<T> piola(T mu, T lambda, const Mat3T<T>& F) {
         return kirchhoffOf<T>(mu, lambda, F) * F.inverse().transpose();
@@ -49,7 +53,9 @@ struct FixedCorotated {
         svd3Batch(&s.F[first], n, d);
         for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m.mu, m.lambda, s.F[first + k], d[k]);
     }
-    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) { s.update(i, gradV, dt); }
+    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
+        s.update(i, gradV, dt);
+    }
     static double energyDensity(const Params& m, const State& s, std::size_t i) {
         return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
     }

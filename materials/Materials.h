@@ -47,7 +47,8 @@ namespace mpm {
 namespace material_detail {
 /// Stands for the f of State::forEachArray(f): any per-particle vector.
 struct ArrayVisitor {
-    template <class T> void operator()(const std::vector<T>&) const {}
+    template <class T>
+    void operator()(const std::vector<T>&) const {}
 };
 }  // namespace material_detail
 
@@ -68,7 +69,9 @@ concept MaterialModel = requires(const typename M::Params& cp, typename M::Param
     { M::waveSpeed(cp, 1.0f) } -> std::convertible_to<float>;
     s.forEachArray(f);
     cs.forEachArray(f);
-    requires requires { s.appendRest(i); } || requires { s.appendRest(i, cp); };
+    requires requires { s.appendRest(i); } || requires {
+        s.appendRest(i, cp);
+    };
 };
 
 template <class... Ms>
@@ -123,7 +126,8 @@ void forEachMaterial(MaterialList<Ms...>, F&& f) {
 /// tau of particles first .. first + n - 1 (n <= simd::kLanes): batched where the model has it.
 template <class M>
 void kirchhoffOfRange(const typename M::Params& m, const typename M::State& s, std::size_t first, int n, Mat3f* tau) {
-    if constexpr (requires { M::kirchhoffBatch(m, s, first, n, tau); }) M::kirchhoffBatch(m, s, first, n, tau);
+    if constexpr (requires { M::kirchhoffBatch(m, s, first, n, tau); })
+        M::kirchhoffBatch(m, s, first, n, tau);
     else
         for (int k = 0; k < n; ++k) tau[k] = M::kirchhoff(m, s, first + std::size_t(k));
 }
@@ -132,7 +136,8 @@ void kirchhoffOfRange(const typename M::Params& m, const typename M::State& s, s
 template <class M>
 void updateDeformationOfRange(const typename M::Params& m, typename M::State& s, std::size_t first, int n, const Mat3f* gradV,
                               float dt) {
-    if constexpr (requires { M::updateDeformationBatch(m, s, first, n, gradV, dt); }) M::updateDeformationBatch(m, s, first, n, gradV, dt);
+    if constexpr (requires { M::updateDeformationBatch(m, s, first, n, gradV, dt); })
+        M::updateDeformationBatch(m, s, first, n, gradV, dt);
     else
         for (int k = 0; k < n; ++k) M::updateDeformation(m, s, first + std::size_t(k), gradV[k], dt);
 }

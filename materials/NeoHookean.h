@@ -25,7 +25,9 @@ struct NeoHookean {
     using State = DeformationGradientState;
 
     template <class V>
-    static void keys(V& v, Params& p) { elasticKeys(v, p.density, p.mu, p.lambda, kThesisElastic); }
+    static void keys(V& v, Params& p) {
+        elasticKeys(v, p.density, p.mu, p.lambda, kThesisElastic);
+    }
     static void scaleStiffness(Params& p, double lambdaScale, double muScale) { scaleLame(p.mu, p.lambda, lambdaScale, muScale); }
 
     template <class T>
@@ -44,7 +46,9 @@ struct NeoHookean {
     }
 
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.F[i]); }
-    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) { s.update(i, gradV, dt); }
+    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
+        s.update(i, gradV, dt);
+    }
     static double energyDensity(const Params& m, const State& s, std::size_t i) {
         return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
     }

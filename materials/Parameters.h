@@ -50,18 +50,24 @@ struct Named {
 
 /// A visitor that does nothing: the concept checks below call keys() with it.
 struct KeyVisitorArchetype {
-    template <class T> void number(const Key&, T&) {}
-    template <class T> void integer(const Key&, T&) {}
+    template <class T>
+    void number(const Key&, T&) {}
+    template <class T>
+    void integer(const Key&, T&) {}
     void flag(const Key&, bool&) {}
-    template <class T> void vec3(const Key&, Eigen::Matrix<T, 3, 1>&) {}
+    template <class T>
+    void vec3(const Key&, Eigen::Matrix<T, 3, 1>&) {}
     void text(const Key&, std::string&) {}
-    template <class E> void choice(const Key&, E&, std::span<const Named<E>>) {}
+    template <class E>
+    void choice(const Key&, E&, std::span<const Named<E>>) {}
     void choice(const Key&, std::string&, const std::vector<std::string>&) {}
     void check(bool, std::string_view, const std::string&) {}
 };
 
 /// A type that describes its scene keys.
 template <class T>
-concept HasSceneKeys = requires(KeyVisitorArchetype& v, T& value) { T::keys(v, value); };
+concept HasSceneKeys = requires(KeyVisitorArchetype& v, T& value) {
+    T::keys(v, value);
+};
 
 }  // namespace mpm

@@ -32,11 +32,23 @@ struct Sand {
 
     struct State {
         std::vector<Mat3f> Fe;
-        std::vector<float> q;       ///< accumulated plastic strain (hardening state)
-        std::vector<float> alpha;   ///< cone coefficient from the friction angle
-        std::vector<float> logVc;   ///< volume correction: log volume to add back
-        template <class Fn> void forEachArray(Fn&& f) { f(Fe); f(q); f(alpha); f(logVc); }
-        template <class Fn> void forEachArray(Fn&& f) const { f(Fe); f(q); f(alpha); f(logVc); }
+        std::vector<float> q;      ///< accumulated plastic strain (hardening state)
+        std::vector<float> alpha;  ///< cone coefficient from the friction angle
+        std::vector<float> logVc;  ///< volume correction: log volume to add back
+        template <class Fn>
+        void forEachArray(Fn&& f) {
+            f(Fe);
+            f(q);
+            f(alpha);
+            f(logVc);
+        }
+        template <class Fn>
+        void forEachArray(Fn&& f) const {
+            f(Fe);
+            f(q);
+            f(alpha);
+            f(logVc);
+        }
         void appendRest(std::size_t n, const Params& m) {
             Fe.resize(Fe.size() + n, Mat3f::Identity());
             q.resize(q.size() + n, 0.0f);
@@ -48,7 +60,10 @@ struct Sand {
     template <class V>
     static void keys(V& v, Params& p) {
         elasticKeys(v, p.density, p.mu, p.lambda, kElastic);
-        v.number(Key{.name = "h0", .help = "hardening h0 (friction angle phi = h0 + (h1 q - h3) exp(-h2 q))", .lo = 0.0, .hi = 89.0,
+        v.number(Key{.name = "h0",
+                     .help = "hardening h0 (friction angle phi = h0 + (h1 q - h3) exp(-h2 q))",
+                     .lo = 0.0,
+                     .hi = 89.0,
                      .unit = "degrees"},
                  p.h0);
         v.number(Key{.name = "h1", .help = "hardening h1", .lo = -89.0, .hi = 89.0, .unit = "degrees"}, p.h1);
@@ -68,8 +83,8 @@ struct Sand {
 
     enum class Case { Elastic, Tip, Cone };
     struct Projection {
-        Vec3f H;      ///< projected log singular values
-        float dq;     ///< hardening increment
+        Vec3f H;   ///< projected log singular values
+        float dq;  ///< hardening increment
         Case which;
     };
 
@@ -80,7 +95,7 @@ struct Sand {
         const float devNorm = dev.norm();
         if (tr > 0.0f) return {Vec3f::Zero(), eps.norm(), Case::Tip};  // case II: tension, to the tip
         const float dgamma = devNorm + (kDim * m.lambda + 2.0f * m.mu) / (2.0f * m.mu) * tr * alpha;
-        if (dgamma <= 0.0f) return {eps, 0.0f, Case::Elastic};          // case I: inside the cone
+        if (dgamma <= 0.0f) return {eps, 0.0f, Case::Elastic};  // case I: inside the cone
         // Case III, onto the cone. Here tr <= 0 and dgamma > 0, so devNorm > 0: Klar's "|eps_hat| = 0"
         // test only guards this division, and pure compression (devNorm = 0) is elastic, not the tip.
         return {eps - dgamma / devNorm * dev, dgamma, Case::Cone};
@@ -93,7 +108,9 @@ struct Sand {
         return mu * e.squaredNorm() + T(0.5) * lambda * e.sum() * e.sum();
     }
     template <class T>
-    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) { return kirchhoffOf<T>(mu, lambda, svd3<T>(F)); }
+    static Mat3T<T> kirchhoffOf(T mu, T lambda, const Mat3T<T>& F) {
+        return kirchhoffOf<T>(mu, lambda, svd3<T>(F));
+    }
     template <class T>
     static Mat3T<T> kirchhoffOf(T mu, T lambda, const Svd3<T>& s) {
         const Vec3T<T> e = s.sigma.array().abs().log().matrix();

@@ -14,7 +14,8 @@ namespace mpm {
 struct Snow {
     static constexpr const char* kName = "snow";
     static constexpr const char* kSceneName = "snow";
-    static constexpr const char* kSummary = "Stomakhin et al. 2013 snow: fixed corotated on F_E, hardening, clamped singular values";
+    static constexpr const char* kSummary =
+        "Stomakhin et al. 2013 snow: fixed corotated on F_E, hardening, clamped singular values";
 
     struct Params {
         float density = kThesisElasticDensity;  ///< thesis Fig. 6.1
@@ -28,8 +29,16 @@ struct Snow {
     struct State {
         std::vector<Mat3f> Fe;
         std::vector<float> Jp;
-        template <class Fn> void forEachArray(Fn&& f) { f(Fe); f(Jp); }
-        template <class Fn> void forEachArray(Fn&& f) const { f(Fe); f(Jp); }
+        template <class Fn>
+        void forEachArray(Fn&& f) {
+            f(Fe);
+            f(Jp);
+        }
+        template <class Fn>
+        void forEachArray(Fn&& f) const {
+            f(Fe);
+            f(Jp);
+        }
         void appendRest(std::size_t n) {
             Fe.resize(Fe.size() + n, Mat3f::Identity());
             Jp.resize(Jp.size() + n, 1.0f);

@@ -22,7 +22,6 @@
 
 namespace mpm {
 
-
 template <class T>
 struct Svd3 {
     Mat3T<T> U, V;

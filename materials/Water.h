@@ -31,8 +31,14 @@ struct Water {
 
     struct State {
         std::vector<float> J;  ///< volume ratio det F
-        template <class F> void forEachArray(F&& f) { f(J); }
-        template <class F> void forEachArray(F&& f) const { f(J); }
+        template <class F>
+        void forEachArray(F&& f) {
+            f(J);
+        }
+        template <class F>
+        void forEachArray(F&& f) const {
+            f(J);
+        }
         void appendRest(std::size_t n) { J.resize(J.size() + n, 1.0f); }
     };
 
@@ -43,9 +49,11 @@ struct Water {
         v.number(Key{.name = "density", .help = "rest density rho0", .lo = kTiny, .hi = kHuge, .unit = "kg/m^3"}, p.density);
         v.number(Key{.name = "bulk_modulus", .help = "bulk modulus k", .lo = 0.0, .hi = kHuge, .unit = "Pa"}, p.bulkModulus);
         v.number(Key{.name = "gamma", .help = "stiffening exponent of the equation of state", .lo = 1.0, .hi = 20.0}, p.gamma);
-        v.flag(Key{.name = "tension",
-                   .help = "hold negative pressure (the thesis's EOS: free-surface water turns cohesive); false clamps J to at most 1"},
-               p.tension);
+        v.flag(
+            Key{.name = "tension",
+                .help =
+                    "hold negative pressure (the thesis's EOS: free-surface water turns cohesive); false clamps J to at most 1"},
+            p.tension);
     }
     /// A set's lambda_scale scales the bulk modulus, water's only Lame-like parameter; mu_scale has nothing to scale.
     static void scaleStiffness(Params& p, double lambdaScale, double /*muScale*/) {

@@ -23,9 +23,10 @@ enum class LeafGrain : std::size_t {
 /// Calls f(leaf) for leaf = 0 .. count - 1, in parallel.
 template <class F>
 void forEachLeaf(std::size_t count, LeafGrain grain, F&& f) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, std::size_t(grain)), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t l = r.begin(); l < r.end(); ++l) f(l);
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, std::size_t(grain)),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t l = r.begin(); l < r.end(); ++l) f(l);
+                      });
 }
 
 /// As forEachLeaf, but f(begin, end) takes a task's whole range of leaves, for work that sets up something

@@ -268,8 +268,7 @@ std::size_t SparseGrid::memoryBytes() const {
            leaves_.capacity() * sizeof(LeafView) + neighbours_.capacity() * sizeof(std::array<uint32_t, kNeighbours>) +
            sources_.capacity() * sizeof(std::array<uint32_t, kNeighbours>) + transferScratch_.capacity() * sizeof(float) +
            (written_.capacity() + writtenBefore_.capacity()) * sizeof(NodeBox) + std::size_t(t.previousIndex->memUsage()) +
-           histogram_.capacity() * sizeof(uint32_t) +
-           leafCount_.capacity() * sizeof(uint32_t);
+           histogram_.capacity() * sizeof(uint32_t) + leafCount_.capacity() * sizeof(uint32_t);
 }
 
 std::size_t SparseGrid::allocatedLeaves() const { return std::size_t(trees_->mass.leafCount()); }

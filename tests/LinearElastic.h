@@ -22,11 +22,15 @@ struct LinearElastic {
     using State = DeformationGradientState;
 
     template <class V>
-    static void keys(V& v, Params& p) { elasticKeys(v, p.density, p.mu, p.lambda, kDefault); }
+    static void keys(V& v, Params& p) {
+        elasticKeys(v, p.density, p.mu, p.lambda, kDefault);
+    }
     static void scaleStiffness(Params& p, double lambdaScale, double muScale) { scaleLame(p.mu, p.lambda, lambdaScale, muScale); }
 
     template <class T>
-    static Mat3T<T> strain(const Mat3T<T>& F) { return T(0.5) * (F + F.transpose()) - Mat3T<T>::Identity(); }
+    static Mat3T<T> strain(const Mat3T<T>& F) {
+        return T(0.5) * (F + F.transpose()) - Mat3T<T>::Identity();
+    }
     template <class T>
     static T psi(T mu, T lambda, const Mat3T<T>& F) {
         const Mat3T<T> e = strain(F);
@@ -38,9 +42,15 @@ struct LinearElastic {
         return T(2) * mu * e + lambda * e.trace() * Mat3T<T>::Identity();
     }
 
-    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return piola<float>(m.mu, m.lambda, s.F[i]) * s.F[i].transpose(); }
-    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) { s.update(i, gradV, dt); }
-    static double energyDensity(const Params& m, const State& s, std::size_t i) { return psi<double>(m.mu, m.lambda, s.F[i].cast<double>()); }
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
+        return piola<float>(m.mu, m.lambda, s.F[i]) * s.F[i].transpose();
+    }
+    static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
+        s.update(i, gradV, dt);
+    }
+    static double energyDensity(const Params& m, const State& s, std::size_t i) {
+        return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
+    }
     static float volumeRatio(const State& s, std::size_t i) { return s.F[i].determinant(); }
     static float stiffnessKey(const State& s, std::size_t i) { return s.F[i].determinant(); }
     static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }

@@ -50,7 +50,8 @@ TEST(Cli, SceneFormatReferenceIsTheExplainOutput) {
     const Result r = runMpm("validate --explain");
     std::ifstream in(std::string(MPM_SOURCE_DIR) + "/docs/scene-format.md");
     const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    EXPECT_EQ(r.output, doc) << "docs/scene-format.md is stale: regenerate it with `mpm validate --explain > docs/scene-format.md`";
+    EXPECT_EQ(r.output, doc)
+        << "docs/scene-format.md is stale: regenerate it with `mpm validate --explain > docs/scene-format.md`";
 }
 
 TEST(Cli, RunWritesFramesAndStats) {
@@ -103,7 +104,9 @@ TEST(Cli, UnstableFrameIsRetriedWithHalfTheStepWhenAsked) {
     std::getline(csv, header);
     const auto column = [&](const std::string& row, const std::string& name) {
         std::size_t idx = 0, pos = 0;
-        for (std::size_t p = 0; (p = header.find(',', pos)) != std::string::npos && header.substr(pos, p - pos) != name; pos = p + 1) ++idx;
+        for (std::size_t p = 0; (p = header.find(',', pos)) != std::string::npos && header.substr(pos, p - pos) != name;
+             pos = p + 1)
+            ++idx;
         std::stringstream ss(row);
         std::string cell;
         for (std::size_t i = 0; i <= idx; ++i) std::getline(ss, cell, ',');

@@ -41,9 +41,9 @@ TEST(ColliderGeometry, SignedDistances) {
 
 namespace {
 struct PlaneRun {
-    double deepest = 0;       // largest penetration below the plane, in cells
+    double deepest = 0;  // largest penetration below the plane, in cells
     FrameStats start, end;
-    double bottomSpeed = 0;   // mean |v| of the particles within half a cell of the plane
+    double bottomSpeed = 0;       // mean |v| of the particles within half a cell of the plane
     double contactNodeSpeed = 0;  // largest |v| of a grid node with mass at or below the plane
 };
 
@@ -72,7 +72,8 @@ PlaneRun runOnPlane(Boundary boundary, float friction, const Vec3f& v0, int step
         const LeafView& leaf = sim.grid().leaf(l);
         for (int n = 0; n < kLeafNodes; ++n)
             if (leaf.mass[n] != 0.0f && leaf.origin[1] + ((n >> kLeafLog2) & (kLeafDim - 1)) <= 0)
-                out.contactNodeSpeed = std::max(out.contactNodeSpeed, double(Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm()));
+                out.contactNodeSpeed =
+                    std::max(out.contactNodeSpeed, double(Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm()));
     }
     return out;
 }

@@ -27,11 +27,13 @@ TEST(ExtraMaterial, JoinsScenesAndTheFormatByItsHeaderAndOneListEntry) {
     EXPECT_NE(format.find("**linear** (`linear_elastic`)"), std::string::npos);
     EXPECT_NE(format.find("jelly, rubber, snow, sand, linear"), std::string::npos);
     try {
-        parseScene(R"({"sets":[{"material":"linear","material_params":{"bulk_modulus":1},"shape":{"type":"box","min":[0,0,0],"max":[1,1,1]}}]})",
-                   "bad.json");
+        parseScene(
+            R"({"sets":[{"material":"linear","material_params":{"bulk_modulus":1},"shape":{"type":"box","min":[0,0,0],"max":[1,1,1]}}]})",
+            "bad.json");
         FAIL() << "an unknown key of the new material was accepted";
     } catch (const SceneError& e) {
-        EXPECT_NE(std::string(e.what()).find("bad.json: /sets/0/material_params/bulk_modulus: unknown key; known here: density, youngs_modulus"),
+        EXPECT_NE(std::string(e.what()).find(
+                      "bad.json: /sets/0/material_params/bulk_modulus: unknown key; known here: density, youngs_modulus"),
                   std::string::npos)
             << e.what();
     }
@@ -76,7 +78,8 @@ TEST(ExtraMaterial, StressIsTheEnergyGradientAndAReleasedBlockKeepsItsEnergy) {
         worstRise = std::max(worstRise, st.totalEnergy() - start.totalEnergy());
         EXPECT_LT(st.momentum.norm(), 1e-6 * st.mass);
     }
-    std::printf("released block: peak kinetic %.3g of the stored %.3g J, largest rise %.3g J\n", peakKinetic, start.elasticEnergy, worstRise);
-    EXPECT_GT(peakKinetic, 0.2 * start.elasticEnergy);      // the block did ring
-    EXPECT_LT(worstRise, 0.01 * start.elasticEnergy);       // and made no energy
+    std::printf("released block: peak kinetic %.3g of the stored %.3g J, largest rise %.3g J\n", peakKinetic, start.elasticEnergy,
+                worstRise);
+    EXPECT_GT(peakKinetic, 0.2 * start.elasticEnergy);  // the block did ring
+    EXPECT_LT(worstRise, 0.01 * start.elasticEnergy);   // and made no energy
 }

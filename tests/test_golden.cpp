@@ -23,11 +23,13 @@ struct Hasher {
         const auto* b = static_cast<const unsigned char*>(p);
         for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
     }
-    template <class T> void value(const T& v) {
+    template <class T>
+    void value(const T& v) {
         static_assert(std::is_trivially_copyable_v<T>);
         bytes(&v, sizeof(T));
     }
-    template <class T> void array(const std::vector<T>& a) {
+    template <class T>
+    void array(const std::vector<T>& a) {
         value(a.size());
         if (!a.empty()) bytes(a.data(), a.size() * sizeof(T));
     }
@@ -38,8 +40,7 @@ uint64_t hashState(Simulation& sim) {
     h.value(sim.time());
     h.value(sim.frame());
     h.value(sim.substepCount());
-    for (AnySpecies& s : sim.species())
-        std::visit([&](auto& sp) { sp.forEachArray([&](const auto& arr) { h.array(arr); }); }, s);
+    for (AnySpecies& s : sim.species()) std::visit([&](auto& sp) { sp.forEachArray([&](const auto& arr) { h.array(arr); }); }, s);
     return h.h;
 }
 

@@ -28,9 +28,9 @@ TYPED_TEST(KernelTest, PartitionOfUnityAndMoments) {
             EXPECT_GE(w[i], 0.0f);
             sw += w[i];
             sdw += dw[i];
-            first += w[i] * (i - fx);          // sum w (x_i - x_p) = 0
+            first += w[i] * (i - fx);              // sum w (x_i - x_p) = 0
             second += w[i] * (i - fx) * (i - fx);  // D_p / dx^2
-            dwMoment += dw[i] * (i - fx);      // sum grad w (x_i - x_p)^T = I
+            dwMoment += dw[i] * (i - fx);          // sum grad w (x_i - x_p)^T = I
         }
         EXPECT_NEAR(sw, 1.0, 1e-6);
         EXPECT_NEAR(sdw, 0.0, 1e-6);

@@ -23,19 +23,22 @@ Mat3d randomF(std::mt19937& rng) {
     return F;
 }
 
-template <class M> struct Elastic;
-#define MPM_ELASTIC(M)                                                                                         \
-    template <> struct Elastic<M> {                                                                            \
-        static double psi(const Mat3d& F) { return M::psi<double>(mu, lambda, F); }                          \
-        static Mat3d P(const Mat3d& F) { return M::piola<double>(mu, lambda, F); }                           \
-        static constexpr double mu = 3.0e4, lambda = 5.0e4;                                                   \
+template <class M>
+struct Elastic;
+#define MPM_ELASTIC(M)                                                              \
+    template <>                                                                     \
+    struct Elastic<M> {                                                             \
+        static double psi(const Mat3d& F) { return M::psi<double>(mu, lambda, F); } \
+        static Mat3d P(const Mat3d& F) { return M::piola<double>(mu, lambda, F); }  \
+        static constexpr double mu = 3.0e4, lambda = 5.0e4;                         \
     };
 MPM_ELASTIC(FixedCorotated)
 MPM_ELASTIC(NeoHookean)
 MPM_ELASTIC(Sand)
 }  // namespace
 
-template <class M> class ElasticModel : public ::testing::Test {};
+template <class M>
+class ElasticModel : public ::testing::Test {};
 using ElasticModels = ::testing::Types<FixedCorotated, NeoHookean, Sand>;
 TYPED_TEST_SUITE(ElasticModel, ElasticModels);
 
@@ -96,8 +99,11 @@ TEST(Materials, KirchhoffIsPiolaTimesFTranspose) {
     std::mt19937 rng(4);
     for (int i = 0; i < 20; ++i) {
         const Mat3d F = randomF(rng);
-        EXPECT_LT((FixedCorotated::kirchhoffOf<double>(3e4, 5e4, F) - FixedCorotated::piola<double>(3e4, 5e4, F) * F.transpose()).norm(), 1e-6);
-        EXPECT_LT((NeoHookean::kirchhoffOf<double>(3e4, 5e4, F) - NeoHookean::piola<double>(3e4, 5e4, F) * F.transpose()).norm(), 1e-6);
+        EXPECT_LT((FixedCorotated::kirchhoffOf<double>(3e4, 5e4, F) - FixedCorotated::piola<double>(3e4, 5e4, F) * F.transpose())
+                      .norm(),
+                  1e-6);
+        EXPECT_LT((NeoHookean::kirchhoffOf<double>(3e4, 5e4, F) - NeoHookean::piola<double>(3e4, 5e4, F) * F.transpose()).norm(),
+                  1e-6);
         EXPECT_LT((Sand::kirchhoffOf<double>(3e4, 5e4, F) - Sand::piola<double>(3e4, 5e4, F) * F.transpose()).norm(), 1e-6);
     }
 }
@@ -143,8 +149,8 @@ TEST(Svd, MatchesEigenJacobiOnRandomRepeatedTinyAndInvertedF) {
     for (int n = 0; n < 50; ++n) {
         const Mat3d R1 = randomRotation(rng), R2 = randomRotation(rng);
         // Repeated singular values (all three, and two), a rotation, tiny and zero ones, an inversion.
-        for (const Vec3d& sigma : {Vec3d(1, 1, 1), Vec3d(2, 2, 0.5), Vec3d(1.5, 0.7, 0.7), Vec3d(1, 1e-6, 1e-7),
-                                  Vec3d(1, 1, 0), Vec3d(0.9, 0.8, -0.3), Vec3d(1e3, 1, 1e-3)}) {
+        for (const Vec3d& sigma : {Vec3d(1, 1, 1), Vec3d(2, 2, 0.5), Vec3d(1.5, 0.7, 0.7), Vec3d(1, 1e-6, 1e-7), Vec3d(1, 1, 0),
+                                   Vec3d(0.9, 0.8, -0.3), Vec3d(1e3, 1, 1e-3)}) {
             const Mat3d F = R1 * sigma.asDiagonal() * R2.transpose();
             expectValidSvd<double>(F, 1e-10);
             expectValidSvd<float>(F.cast<float>(), 2e-5f);
@@ -180,7 +186,8 @@ TEST(Svd, BatchOfEightMatchesOneAtATime) {
             EXPECT_TRUE(batch[k].sigma.isApprox(one.sigma, 1e-5f) || (batch[k].sigma - one.sigma).norm() < 1e-6f) << first + k;
             // U and V are unique only up to the repeated-value subspaces, so check them as an SVD.
             const Svd3<float>& b = batch[k];
-            EXPECT_LT((b.U * b.sigma.asDiagonal() * b.V.transpose() - F[first + k]).norm(), 1e-5f * (1.0f + F[first + k].norm())) << first + k;
+            EXPECT_LT((b.U * b.sigma.asDiagonal() * b.V.transpose() - F[first + k]).norm(), 1e-5f * (1.0f + F[first + k].norm()))
+                << first + k;
             EXPECT_NEAR(b.U.determinant(), 1.0f, 1e-5f) << first + k;
             EXPECT_NEAR(b.V.determinant(), 1.0f, 1e-5f) << first + k;
             EXPECT_LT((b.U.transpose() * b.U - Mat3f::Identity()).norm(), 1e-5f) << first + k;
@@ -217,8 +224,10 @@ void expectBatchMatchesScalar() {
     for (int i = 0; i < n; ++i) {
         Mat3f F = Mat3f::Identity();
         for (int k = 0; k < 9; ++k) F(k / 3, k % 3) += u(rng), gradV[i](k / 3, k % 3) = 10.0f * u(rng);
-        if constexpr (requires { one.state.F; }) one.state.F[i] = batch.state.F[i] = F;
-        else one.state.Fe[i] = batch.state.Fe[i] = F;
+        if constexpr (requires { one.state.F; })
+            one.state.F[i] = batch.state.F[i] = F;
+        else
+            one.state.Fe[i] = batch.state.Fe[i] = F;
     }
     const float dt = 1e-3f;
     for (int first = 0; first < n; first += simd::kLanes) {
@@ -331,7 +340,9 @@ TEST(SandModel, VolumeCorrectionRestoresVolumeLostUnderTension) {
         EXPECT_TRUE(s.Fe[0].isApprox(Mat3f::Identity()));
         Sand::updateDeformation(m, s, 0, Mat3f::Identity() * (1.0f / (1.0f + 10.0f * dt) - 1.0f) / dt, dt);
         const float J = s.Fe[0].determinant();
-        if (correct) EXPECT_NEAR(J, 1.0f, 1e-4f);   // the separation is remembered: back at rest volume
-        else EXPECT_LT(J, 0.98f);                   // without it the sand is compressed below rest
+        if (correct)
+            EXPECT_NEAR(J, 1.0f, 1e-4f);  // the separation is remembered: back at rest volume
+        else
+            EXPECT_LT(J, 0.98f);  // without it the sand is compressed below rest
     }
 }

@@ -27,8 +27,12 @@ double largestPieceShare(const std::vector<Vec3d>& x, double link) {
         return i;
     };
     // Hash the particles into cells of edge `link`; a link can only join particles in neighbouring cells.
-    auto cellOf = [&](const Vec3d& p) { return Vec3i(int(std::floor(p[0] / link)), int(std::floor(p[1] / link)), int(std::floor(p[2] / link))); };
-    auto key = [](const Vec3i& c) { return (int64_t(c[0]) * 73856093) ^ (int64_t(c[1]) * 19349663) ^ (int64_t(c[2]) * 83492791); };
+    auto cellOf = [&](const Vec3d& p) {
+        return Vec3i(int(std::floor(p[0] / link)), int(std::floor(p[1] / link)), int(std::floor(p[2] / link)));
+    };
+    auto key = [](const Vec3i& c) {
+        return (int64_t(c[0]) * 73856093) ^ (int64_t(c[1]) * 19349663) ^ (int64_t(c[2]) * 83492791);
+    };
     std::unordered_map<int64_t, std::vector<std::size_t>> cells;
     for (std::size_t i = 0; i < x.size(); ++i) cells[key(cellOf(x[i]))].push_back(i);
     for (std::size_t i = 0; i < x.size(); ++i) {
@@ -51,7 +55,8 @@ double largestPieceShare(const std::vector<Vec3d>& x, double link) {
 /// ball's mean horizontal velocity then.
 std::pair<double, double> throwSnowballAtWall(double youngsModulus, int frames) {
     const std::string text = R"({
-      "simulation": { "frames": )" + std::to_string(frames) + R"(, "fps": 24, "substeps": 10, "dx": 0.02, "gravity": [0, -9.81, 0] },
+      "simulation": { "frames": )" +
+                             std::to_string(frames) + R"(, "fps": 24, "substeps": 10, "dx": 0.02, "gravity": [0, -9.81, 0] },
       "sets": [ { "name": "snowball", "material": "snow", "material_params": { "youngs_modulus": )" +
                              std::to_string(youngsModulus) + R"( },
                   "shape": { "type": "sphere", "center": [0.35, 0.3, 0.0], "radius": 0.1 }, "velocity": [6.0, 6.0, 0.0] } ],
@@ -117,8 +122,10 @@ TEST(SceneChecks, WaterPouredOnJellyDeformsItAndIsPushedBack) {
                 vy += water.v[i][1];
                 ++over;
             }
-        if (minY < lowestWater) lowestWater = minY;
-        else if (over > 0) waterVyAfterLowest = std::max(waterVyAfterLowest, vy / over);
+        if (minY < lowestWater)
+            lowestWater = minY;
+        else if (over > 0)
+            waterVyAfterLowest = std::max(waterVyAfterLowest, vy / over);
     }
     // The water lands (the jelly top sits at 0.12) and dents the jelly by more than a cell's worth of strain.
     EXPECT_LT(lowestTop, restTop - 0.01) << "the jelly should give under the water";
@@ -128,4 +135,3 @@ TEST(SceneChecks, WaterPouredOnJellyDeformsItAndIsPushedBack) {
     EXPECT_GT(lowestWater, lowestTop - 0.02) << "water sank more than a cell into the jelly";
     EXPECT_GT(waterVyAfterLowest, 0.0) << "the jelly did not push the water back";
 }
-

@@ -36,8 +36,8 @@ TEST(Jelly, DroppedCubeBouncesAndKeepsItsVolume) {
         maxUp = std::max(maxUp, sim.measure().momentum[1]);
         minJ = std::min(minJ, sim.measure().minJ);
     }
-    EXPECT_GT(maxUp, 0.0);       // it bounced: momentum turned upward
-    EXPECT_LT(minJ, 0.99);       // and was squeezed on impact
+    EXPECT_GT(maxUp, 0.0);               // it bounced: momentum turned upward
+    EXPECT_LT(minJ, 0.99);               // and was squeezed on impact
     EXPECT_NEAR(meanJ(sim), 1.0, 0.02);  // back to its rest volume within 2%
 }
 
@@ -48,7 +48,10 @@ TEST(Jelly, SlidingBlockDeceleratesAtMuG) {
     const float mu = 0.3f;
     addJellyBlock(sim, Vec3d(0, 0, 0), Vec3d(0.3, 0.1, 0.3), Vec3f(2.0f, 0.0f, 0.0f));
     sim.addCollider(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, mu));
-    auto vx = [&] { const FrameStats st = sim.measure(); return st.momentum[0] / st.mass; };
+    auto vx = [&] {
+        const FrameStats st = sim.measure();
+        return st.momentum[0] / st.mass;
+    };
     while (sim.time() < 0.05) sim.substep(s.targetDt());
     const double t0 = sim.time(), v0 = vx();
     while (sim.time() < 0.35) sim.substep(s.targetDt());

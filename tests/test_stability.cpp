@@ -104,7 +104,7 @@ TEST(Stability, CflStepBoundsTheDistanceGravityAddsToAVerySoftBody) {
     const double dt = sim.cflTimeStep();
     const double c = Water::waveSpeed(w, 1.0f), g = s.gravity.norm();
     EXPECT_NEAR(dt * (c + g * dt), s.cfl * s.dx, 1e-9);  // the quadratic's root
-    EXPECT_NO_THROW(sim.advanceFrame());                  // and no particle crosses a cell in a substep
+    EXPECT_NO_THROW(sim.advanceFrame());                 // and no particle crosses a cell in a substep
     SimulationSettings still = s;
     still.gravity.setZero();
     Simulation noGravity(still);

@@ -51,7 +51,10 @@ double runUntil(Simulation& sim, double t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-template <class M> Species<M>& only(Simulation& sim) { return std::get<Species<M>>(sim.species().at(0)); }
+template <class M>
+Species<M>& only(Simulation& sim) {
+    return std::get<Species<M>>(sim.species().at(0));
+}
 
 std::string kv(std::initializer_list<std::pair<const char*, double>> items) {
     std::ostringstream s;
@@ -155,7 +158,10 @@ CaseResult vibratingBar(const CaseConfig& c) {
         for (std::size_t i = 0; i < sp.size(); ++i) m += sp.p.mass[i], p += sp.p.mass[i] * sp.p.v[i][0];
         return p / m;
     };
-    auto energy = [&] { const FrameStats st = sim.measure(); return st.kineticEnergy + st.elasticEnergy; };
+    auto energy = [&] {
+        const FrameStats st = sim.measure();
+        return st.kineticEnergy + st.elasticEnergy;
+    };
     const double e0 = energy();
     std::vector<double> crossings;
     double prevT = 0, prevV = vcm(), wall = 0, amplitude = 0;
@@ -233,7 +239,8 @@ CaseResult manufactured(const CaseConfig& c) {
         const auto start = std::chrono::steady_clock::now();
         const double taken = sim.substep(dt);
         wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (std::abs(taken - dt) > 1e-9 * dt) throw std::logic_error("manufactured: the engine shortened the step the body force assumed");
+        if (std::abs(taken - dt) > 1e-9 * dt)
+            throw std::logic_error("manufactured: the engine shortened the step the body force assumed");
         worst = std::max(worst, error());
     }
     return finish(sim, wall, worst, true, kv({{"final_error", error()}, {"wave_speed", wave}}));
@@ -359,7 +366,8 @@ CaseResult damBreak(const CaseConfig& c) {
     for (std::size_t k = 0; k < front.size(); ++k)
         if (front[k].first >= Tmin && front[k].first <= Tmax) events.emplace_back(front[k].first / std::sqrt(2 * g / a), int(k));
     for (std::size_t k = 0; k < height.size(); ++k)
-        if (height[k].first / std::sqrt(g / a) <= Tmax / std::sqrt(2 * g / a)) events.emplace_back(height[k].first / std::sqrt(g / a), -1 - int(k));
+        if (height[k].first / std::sqrt(g / a) <= Tmax / std::sqrt(2 * g / a))
+            events.emplace_back(height[k].first / std::sqrt(g / a), -1 - int(k));
     std::sort(events.begin(), events.end());
     for (const auto& [t, k] : events) {
         wall += runUntil(sim, t);
@@ -428,8 +436,8 @@ const std::vector<ValidationCase>& cases() {
         v.push_back({"cantilever", "|mean tip deflection - delta| / delta over 3 periods (delta = 1.4868e-2 m)",
                      "< 3% at h/dx >= 8, period within 3%", 2, 2, 1, cantilever});
         v.push_back({"hydrostatic", "|p_floor / (rho0 g H0) - 1|", "< 1% at H0/dx >= 32, no tension", 1, 2, 1, hydrostatic});
-        v.push_back({"dam_break", "relative RMS error of the front Z for 0.84 <= T <= 3.33 (Martin and Moyce 1952)",
-                     "< 10%", 0, 2, 1, damBreak});
+        v.push_back({"dam_break", "relative RMS error of the front Z for 0.84 <= T <= 3.33 (Martin and Moyce 1952)", "< 10%", 0,
+                     2, 1, damBreak});
         for (int phi : {20, 30, 40})
             v.push_back({"angle_of_repose_" + std::to_string(phi), "|flank angle - phi| [degrees]",
                          "angle in [phi - 3, phi + 6] degrees", 0, 1, 0,

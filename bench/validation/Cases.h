@@ -23,24 +23,24 @@ struct CaseConfig {
 };
 
 struct CaseResult {
-    double error = 0.0;          ///< the case's metric (see ValidationCase::metric)
-    bool pass = false;           ///< within the pass band (only meaningful at or past passLevel)
+    double error = 0.0;  ///< the case's metric (see ValidationCase::metric)
+    bool pass = false;   ///< within the pass band (only meaningful at or past passLevel)
     double dx = 0.0;
     std::size_t particles = 0;
     long long substeps = 0;
-    double wallSeconds = 0.0;    ///< simulation only, set-up and measuring excluded
-    std::string detail;          ///< secondary numbers, "key=value;..."
+    double wallSeconds = 0.0;  ///< simulation only, set-up and measuring excluded
+    std::string detail;        ///< secondary numbers, "key=value;..."
 };
 
 struct ValidationCase {
     std::string name;
-    std::string metric;          ///< what error means, with units
-    std::string band;            ///< the pass band in words
-    int passLevel = 0;           ///< the band applies from this level on (e.g. L/dx >= 25)
-    int maxLevel = 2;            ///< finest level the report runs for the baseline choice
-    int maxLevelChoices = 2;     ///< finest level for the other choices (cost control)
+    std::string metric;       ///< what error means, with units
+    std::string band;         ///< the pass band in words
+    int passLevel = 0;        ///< the band applies from this level on (e.g. L/dx >= 25)
+    int maxLevel = 2;         ///< finest level the report runs for the baseline choice
+    int maxLevelChoices = 2;  ///< finest level for the other choices (cost control)
     std::function<CaseResult(const CaseConfig&)> run;
-    double minOrder = 0.0;       ///< when > 0, a level passes only if log2(e(h) / e(h/2)) against the level before reaches it
+    double minOrder = 0.0;  ///< when > 0, a level passes only if log2(e(h) / e(h/2)) against the level before reaches it
 };
 
 /// Where scenes/validation/ lives (defaults to the source tree this was built from).

@@ -14,8 +14,8 @@ namespace mpm::validation {
 
 namespace {
 
-constexpr double kDx = 0.02;       ///< grid spacing of every setup [m]
-constexpr double kBlock = 0.08;    ///< block edge: 4 cells, 512 particles
+constexpr double kDx = 0.02;     ///< grid spacing of every setup [m]
+constexpr double kBlock = 0.08;  ///< block edge: 4 cells, 512 particles
 constexpr double kSphereRadius = 0.08;
 constexpr double kImpactSpeed = 1000.0;
 constexpr double kSpinFraction = 0.3;       ///< w R = 0.3 c
@@ -43,8 +43,8 @@ std::string materialParams(const std::string& material, const std::string& stiff
 
 std::string set(const std::string& name, const std::string& material, const std::string& params, const std::string& shape,
                 const std::string& velocity, const char* sampling = "lattice") {
-    return R"({ "name": ")" + name + R"(", "material": ")" + material + R"(", "material_params": )" + params +
-           R"(, "shape": )" + shape + R"(, "velocity": )" + velocity + R"(, "sampling": ")" + sampling + R"(" })";
+    return R"({ "name": ")" + name + R"(", "material": ")" + material + R"(", "material_params": )" + params + R"(, "shape": )" +
+           shape + R"(, "velocity": )" + velocity + R"(, "sampling": ")" + sampling + R"(" })";
 }
 
 std::string scene(const StabilityRun& r, const std::string& sets, const std::string& colliders, bool gravity) {
@@ -60,8 +60,9 @@ const std::string kFloor = R"({ "type": "plane", "point": [0, 0, 0], "normal": [
 
 /// The wave speed of a material at rest, read off the CFL step of a probe scene.
 double restWaveSpeed(const StabilityRun& r, const std::string& params) {
-    SceneDesc probe = parseScene(scene(r, set("probe", r.material, params, box(0, 0, 0, kBlock, kBlock, kBlock), vec(0, 0, 0)), "", false),
-                                 "stability_probe.json");
+    SceneDesc probe =
+        parseScene(scene(r, set("probe", r.material, params, box(0, 0, 0, kBlock, kBlock, kBlock), vec(0, 0, 0)), "", false),
+                   "stability_probe.json");
     auto sim = buildSimulation(probe);
     sim->emitDue();
     return r.cfl * kDx / sim->cflTimeStep();
@@ -85,9 +86,10 @@ std::string sceneText(const StabilityRun& r, double c) {
     if (r.setup == "dropped_column")  // a column dropped from twice its height
         return scene(r, set("column", m, "{}", box(0, 2 * b, 0, 0.5 * b, 3 * b, 0.5 * b), zero), kFloor, true);
     if (r.setup == "wall_impact")
-        return scene(r, set("body", m, "{}", box(0, 0, 0, b, b, b), vec(kImpactSpeed, 0, 0)),
-                     R"({ "type": "plane", "point": )" + vec(b + 2 * kDx, 0, 0) + R"(, "normal": [-1, 0, 0], "boundary": "sticky" })",
-                     false);
+        return scene(
+            r, set("body", m, "{}", box(0, 0, 0, b, b, b), vec(kImpactSpeed, 0, 0)),
+            R"({ "type": "plane", "point": )" + vec(b + 2 * kDx, 0, 0) + R"(, "normal": [-1, 0, 0], "boundary": "sticky" })",
+            false);
     if (r.setup == "collision") {
         const double v = 0.5 * kCollisionFraction * c;
         return scene(r,
@@ -96,7 +98,10 @@ std::string sceneText(const StabilityRun& r, double c) {
                      "", false);
     }
     if (r.setup == "spinning_sphere")  // spin set after loading: v = w x r, C = [w]x
-        return scene(r, set("sphere", m, "{}", R"({ "type": "sphere", "center": [0, 0, 0], "radius": )" + std::to_string(kSphereRadius) + " }", zero), "", false);
+        return scene(r,
+                     set("sphere", m, "{}",
+                         R"({ "type": "sphere", "center": [0, 0, 0], "radius": )" + std::to_string(kSphereRadius) + " }", zero),
+                     "", false);
     throw std::invalid_argument("unknown stability setup \"" + r.setup + "\"");
 }
 
@@ -115,7 +120,7 @@ void spin(Simulation& sim, double omega) {
 }  // namespace
 
 const std::vector<std::string>& stabilitySetups() {
-    static const std::vector<std::string> s = {"resting_block", "sliver",      "collision",  "spinning_sphere",
+    static const std::vector<std::string> s = {"resting_block",  "sliver",      "collision",  "spinning_sphere",
                                                "dropped_column", "steel_block", "soft_block", "wall_impact"};
     return s;
 }

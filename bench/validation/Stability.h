@@ -18,7 +18,7 @@ struct StabilityRun {
 
 struct StabilityOutcome {
     bool stable = false;
-    std::string reason;          ///< why not ("energy grew 3.2%", the engine's message, ...)
+    std::string reason;  ///< why not ("energy grew 3.2%", the engine's message, ...)
     long long substeps = 0;
     std::size_t particles = 0;
     double minJ = 1.0, maxSpeed = 0.0, energyGrowth = 0.0, wallSeconds = 0.0;

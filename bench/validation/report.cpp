@@ -2,9 +2,9 @@
 // sweep. Writes CSVs and machine.txt; tools/validation_report.py turns them into PNG plots and report.md.
 //   mpm_report accuracy  [--out DIR] [--cases a,b] [--quick]
 //   mpm_report stability [--out DIR] [--quick]
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
+#include <CLI/CLI.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -75,10 +75,13 @@ int accuracy(const std::string& dir, const std::string& only, bool quick, int th
                 previousError = r.error;
                 std::fprintf(stderr, "%-20s %-9s level %d dx %-9.4g particles %-8zu substeps %-7lld %7.2fs error %-11.4g %s\n",
                              vc.name.c_str(), name.c_str(), level, r.dx, r.particles, r.substeps, r.wallSeconds, r.error,
-                             level < vc.passLevel ? "(below pass level)" : r.pass ? "pass" : "FAIL");
-                csv << vc.name << "," << name << "," << csvQuote(c.label()) << "," << level << "," << r.dx << "," << r.particles << ","
-                    << r.substeps << "," << r.wallSeconds << "," << threads << "," << r.error << "," << (r.pass ? 1 : 0) << ","
-                    << vc.passLevel << "," << csvQuote(vc.metric) << "," << csvQuote(vc.band) << "," << csvQuote(r.detail) << "\n";
+                             level < vc.passLevel ? "(below pass level)"
+                             : r.pass             ? "pass"
+                                                  : "FAIL");
+                csv << vc.name << "," << name << "," << csvQuote(c.label()) << "," << level << "," << r.dx << "," << r.particles
+                    << "," << r.substeps << "," << r.wallSeconds << "," << threads << "," << r.error << "," << (r.pass ? 1 : 0)
+                    << "," << vc.passLevel << "," << csvQuote(vc.metric) << "," << csvQuote(vc.band) << "," << csvQuote(r.detail)
+                    << "\n";
                 writeTextAtomically(dir + "/accuracy.csv", csv.str());  // keep what is done if interrupted
             }
         }
@@ -107,9 +110,9 @@ int stability(const std::string& dir, const std::string& only, bool quick, int t
                     const char* kname = k == Interpolation::Cubic ? "cubic" : "quadratic";
                     std::fprintf(stderr, "%-16s %-7s %-9s cfl %-4g %-8s %6.2fs %s\n", setup.c_str(), material.c_str(), kname, cfl,
                                  o.stable ? "stable" : "UNSTABLE", o.wallSeconds, o.reason.substr(0, 90).c_str());
-                    csv << setup << "," << material << "," << kname << "," << cfl << "," << (o.stable ? 1 : 0) << "," << o.substeps
-                        << "," << o.particles << "," << o.minJ << "," << o.maxSpeed << "," << o.energyGrowth << "," << o.wallSeconds
-                        << "," << threads << "," << csvQuote(o.reason) << "\n";
+                    csv << setup << "," << material << "," << kname << "," << cfl << "," << (o.stable ? 1 : 0) << ","
+                        << o.substeps << "," << o.particles << "," << o.minJ << "," << o.maxSpeed << "," << o.energyGrowth << ","
+                        << o.wallSeconds << "," << threads << "," << csvQuote(o.reason) << "\n";
                     writeTextAtomically(dir + "/stability.csv", csv.str());
                     ranDefault |= cfl == defaultCfl;
                     return o.stable;
