@@ -1,41 +1,69 @@
 // mpm: the command-line front end. `mpm run SCENE` simulates and writes frames; `mpm validate SCENE`
-// checks a scene. Exit codes: 0 success, 2 bad input, 1 failed run.
+// checks a scene and prints what it will cost. Exit codes: 0 success, 2 bad input, 1 failed run, 130 and
+// 143 stopped by SIGINT and SIGTERM (after writing a checkpoint to resume from).
 #include <tbb/global_control.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <new>
 #include <thread>
 
-#include "io/Output.h"
-#include "io/Scene.h"
+#include "io/AtomicFile.h"
+#include "io/Checkpoint.h"
+#include "io/Run.h"
+#include "io/SceneBudget.h"
+#include "io/SceneReader.h"
 
 using namespace mpm;
 
 namespace {
 
 constexpr int kExitOk = 0, kExitRunFailed = 1, kExitBadInput = 2;
+/// The shell's convention: 128 + the signal's number.
+constexpr int kExitSignalBase = 128;
 
-struct FrameRange {
-    int first = 0, last = -1;
-};
+/// The signal that asked the run to stop (0: none). The handler only sets it; a second signal of the same
+/// kind ends the process at once, with the default action.
+std::atomic<int> gStopSignal{0};
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs a lock-free flag");
 
-FrameRange parseFrames(const std::string& text, int sceneFrames) {
-    FrameRange r{0, sceneFrames};
-    if (text.empty()) return r;
+extern "C" void onStopSignal(int sig) {
+    if (gStopSignal.load() != 0) {
+        std::signal(sig, SIG_DFL);
+        std::raise(sig);
+        return;
+    }
+    gStopSignal.store(sig);
+}
+
+void installStopHandlers() {
+    struct sigaction sa {};
+    sa.sa_handler = onStopSignal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+}
+
+RunOptions parseFrames(const std::string& text, RunOptions o) {
+    if (text.empty()) return o;
     const auto colon = text.find(':');
     try {
         if (colon == std::string::npos) throw std::invalid_argument(text);
-        r.first = colon == 0 ? 0 : std::stoi(text.substr(0, colon));
-        r.last = colon + 1 == text.size() ? sceneFrames : std::stoi(text.substr(colon + 1));
+        o.firstFrame = colon == 0 ? 0 : std::stoi(text.substr(0, colon));
+        o.lastFrame = colon + 1 == text.size() ? -1 : std::stoi(text.substr(colon + 1));
     } catch (const std::exception&) {
         throw SceneError("--frames: expected A:B with whole numbers (for example 0:48), got \"" + text + "\"");
     }
-    if (r.first < 0 || r.last < r.first) throw SceneError("--frames: need 0 <= A <= B, got \"" + text + "\"");
-    return r;
+    if (o.firstFrame < 0 || (o.lastFrame >= 0 && o.lastFrame < o.firstFrame))
+        throw SceneError("--frames: need 0 <= A <= B, got \"" + text + "\"");
+    o.framesGiven = true;
+    return o;
 }
 
 std::string clock(double seconds) {
@@ -45,56 +73,79 @@ std::string clock(double seconds) {
     return buf;
 }
 
-int run(const std::string& scenePath, const std::string& outDir, int threads, const std::string& frames, bool quiet) {
-    SceneDesc scene = loadScene(scenePath);
-    const FrameRange range = parseFrames(frames, scene.frames);
-    const int nThreads = threads > 0 ? threads : scene.threads > 0 ? scene.threads : int(std::thread::hardware_concurrency());
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nThreads));
-    std::unique_ptr<Simulation> sim = buildSimulation(scene);
-    FrameWriter writer(scene, speciesLayout(scene), outDir.empty() ? scene.output.directory : outDir);
-    const bool tty = ::isatty(STDERR_FILENO) && !quiet;
-    if (!quiet) {
-        std::fprintf(stderr, "mpm: %s, %d frames at %g fps, dx %g m, %d threads -> %s\n", scenePath.c_str(), range.last,
-                     scene.settings.fps, scene.settings.dx, nThreads, writer.directory().c_str());
-        if (writer.removedFiles())
-            std::fprintf(stderr, "mpm: removed %d frame files of an earlier run of this scene\n", writer.removedFiles());
-    }
-    const auto start = std::chrono::steady_clock::now();
-    sim->emitDue();
-    FrameStats st = sim->measure();
-    if (range.first == 0)
-        writer.writeFrame(0, *sim, st);
-    else
-        writer.recordStats(st);
+struct Progress {
+    bool quiet, tty;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
     long long particleSteps = 0;
-    for (int f = 1; f <= range.last; ++f) {
-        const std::size_t n = sim->particleCount();
-        st = sim->advanceFrame();
-        particleSteps += (long long)n * st.substeps;
-        if (f >= range.first)
-            writer.writeFrame(f, *sim, st);
-        else
-            writer.recordStats(st);
+    int firstFrame = 0;
+
+    void frame(int f, int last, const FrameStats& st, double writeSeconds) {
+        particleSteps += (long long)st.particles * st.substeps;
+        if (quiet) return;
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        const double eta = elapsed / f * (range.last - f);
-        if (quiet) continue;
-        const double pss = particleSteps / std::max(elapsed, 1e-9);
+        const double eta = elapsed / std::max(1, f - firstFrame) * (last - f);
+        const double pss = double(particleSteps) / std::max(elapsed, 1e-9);
         if (tty)
-            std::fprintf(stderr, "\rframe %d/%d | %d substeps | %zu particles | %.3g particle-substeps/s | ETA %s   ", f,
-                         range.last, st.substeps, st.particles, pss, clock(eta).c_str());
+            std::fprintf(stderr, "\rframe %d/%d | %d substeps | %zu particles | %.3g particle-substeps/s | ETA %s   ", f, last,
+                         st.substeps, st.particles, pss, clock(eta).c_str());
         else
-            std::fprintf(stderr, "frame %d/%d substeps %d particles %zu max_speed %.3g sim %.2fs write %.2fs pss %.3g eta %s\n",
-                         f, range.last, st.substeps, st.particles, st.maxSpeed, st.wallSeconds, writer.lastWriteSeconds(), pss,
-                         clock(eta).c_str());
+            std::fprintf(stderr, "frame %d/%d substeps %d particles %zu max_speed %.3g sim %.2fs write %.2fs pss %.3g eta %s\n", f,
+                         last, st.substeps, st.particles, st.maxSpeed, st.wallSeconds, writeSeconds, pss, clock(eta).c_str());
         if (st.retries)
             std::fprintf(stderr, "%smpm: frame %d was restarted %d times with half the time step (stability retries)\n",
                          tty ? "\n" : "", f, st.retries);
     }
-    if (tty) std::fprintf(stderr, "\n");
+};
+
+int run(const std::string& scenePath, const RunOptions& options, int threads, bool quiet) {
+    Progress progress{quiet, ::isatty(STDERR_FILENO) && !quiet};
+    RunEvents events;
+    events.note = [&](const std::string& s) {
+        if (!quiet) std::fprintf(stderr, "mpm: %s\n", s.c_str());
+    };
+    events.warning = [&](const std::string& s) { std::fprintf(stderr, "mpm: warning: %s\n", s.c_str()); };
+    events.frameDone = [&](int f, int last, const FrameStats& st, double w) { progress.frame(f, last, st, w); };
+    // The scene's thread count is known only once it is read; the limit must be in place before any work.
+    const SceneDesc peek = loadScene(scenePath);
+    const int nThreads = threads > 0 ? threads : peek.threads > 0 ? peek.threads : int(std::thread::hardware_concurrency());
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nThreads));
+    installStopHandlers();
+    SceneRun job(scenePath, options, events);
+    progress.firstFrame = job.startFrame();
+    if (!quiet)
+        std::fprintf(stderr, "mpm: %s, frames %d to %d at %g fps, dx %g m, %d threads -> %s\n", scenePath.c_str(), job.startFrame() + 1,
+                     job.lastFrame(), job.scene().settings.fps, job.scene().settings.dx, nThreads, job.directory().c_str());
+    try {
+        job.run(&gStopSignal);
+    } catch (const Interrupted&) {
+        const int sig = gStopSignal.load();
+        std::fprintf(stderr, "%smpm: stopped by %s at frame %d (t = %g s); the state is in %s\nmpm: resume with: mpm run %s -o %s --resume\n",
+                     progress.tty ? "\n" : "", sig == SIGTERM ? "SIGTERM" : "SIGINT", job.simulation().frame(), job.simulation().time(),
+                     job.lastCheckpoint().c_str(), scenePath.c_str(), job.directory().c_str());
+        return kExitSignalBase + (sig ? sig : SIGINT);
+    } catch (const std::bad_alloc&) {
+        const SceneBudget b = estimateBudget(job.scene(), false);
+        std::fprintf(stderr, "\nerror: out of memory at frame %d with %zu particles (the scene needs about %.3g GiB; this machine has %.3g GiB)\n",
+                     job.simulation().frame(), job.simulation().particleCount(), b.memoryBytes / double(1u << 30),
+                     b.machineBytes / double(1u << 30));
+        return kExitRunFailed;
+    }
+    if (progress.tty) std::fprintf(stderr, "\n");
     if (!quiet)
         std::fprintf(stderr, "mpm: done in %s, frames in %s\n",
-                     clock(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()).c_str(),
-                     writer.directory().c_str());
+                     clock(std::chrono::duration<double>(std::chrono::steady_clock::now() - progress.start).count()).c_str(),
+                     job.directory().c_str());
+    return kExitOk;
+}
+
+int validate(const std::string& scenePath, bool strict) {
+    const SceneDesc scene = loadScene(scenePath);
+    const SceneBudget budget = estimateBudget(scene, true);
+    std::cout << scene.resolvedJson << "\n";
+    std::fprintf(stderr, "%s", describeBudget(budget).c_str());
+    checkBudget(scene, budget);
+    (void)strict;
+    std::fprintf(stderr, "%s: valid (%zu particle sets)\n", scenePath.c_str(), scene.sets.size());
     return kExitOk;
 }
 
@@ -105,19 +156,22 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     std::string scenePath, outDir, frames;
     int threads = 0;
-    bool quiet = false, explain = false;
+    bool quiet = false, explain = false, resume = false, force = false, strict = false;
 
     CLI::App* runCmd = app.add_subcommand("run", "simulate a scene and write its frames");
     runCmd->add_option("scene", scenePath, "scene file (JSON)")->required();
     runCmd->add_option("-o,--output", outDir, "output directory (default: the scene's output.directory)");
-    runCmd->add_option("--threads", threads, "worker threads (default: the scene's, else all cores)")
-        ->check(CLI::NonNegativeNumber);
-    runCmd->add_option("--frames", frames, "frames to write, A:B (simulation always starts at frame 0)");
-    runCmd->add_flag("--quiet", quiet, "print nothing but errors");
+    runCmd->add_option("--threads", threads, "worker threads (default: the scene's, else all cores)")->check(CLI::NonNegativeNumber);
+    runCmd->add_option("--frames", frames,
+                       "write only frames A:B (nothing else is deleted; starts from a checkpoint before A when there is one)");
+    runCmd->add_flag("--resume", resume, "continue from the newest valid checkpoint in the output directory");
+    runCmd->add_flag("--force", force, "with --resume: continue even though the scene changed since the checkpoint");
+    runCmd->add_flag("--quiet", quiet, "print nothing but errors and warnings");
 
-    CLI::App* validateCmd = app.add_subcommand("validate", "check a scene file and print it with every default filled in");
+    CLI::App* validateCmd = app.add_subcommand("validate", "check a scene, print it with every default filled in and what it will cost");
     validateCmd->add_option("scene", scenePath, "scene file (JSON)");
     validateCmd->add_flag("--explain", explain, "list every scene field, its default and allowed values");
+    validateCmd->add_flag("--strict", strict, "treat warnings as errors");
 
     try {
         app.parse(argc, argv);
@@ -132,17 +186,30 @@ int main(int argc, char** argv) {
                 return kExitOk;
             }
             if (scenePath.empty()) throw SceneError("validate: give a scene file, or --explain");
-            const SceneDesc scene = loadScene(scenePath);
-            std::cout << scene.resolvedJson << "\n";
-            std::fprintf(stderr, "%s: valid (%zu particle sets)\n", scenePath.c_str(), scene.sets.size());
-            return kExitOk;
+            return validate(scenePath, strict);
         }
-        return run(scenePath, outDir, threads, frames, quiet);
+        RunOptions options;
+        options.outDir = outDir;
+        options.resume = resume;
+        options.force = force;
+        return run(scenePath, parseFrames(frames, options), threads, quiet);
     } catch (const SceneError& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return kExitBadInput;
+    } catch (const LockError& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return kExitBadInput;
     } catch (const SimulationError& e) {
         std::fprintf(stderr, "\nerror: simulation stopped: %s (nothing of that frame was written)\n", e.what());
+        return kExitRunFailed;
+    } catch (const LimitExceeded& e) {
+        std::fprintf(stderr, "\nerror: simulation stopped: %s\n", e.what());
+        return kExitRunFailed;
+    } catch (const WriteError& e) {
+        std::fprintf(stderr, "\nerror: cannot write %s (earlier files are intact)\n", e.what());
+        return kExitRunFailed;
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "\nerror: out of memory\n");
         return kExitRunFailed;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "\nerror: %s\n", e.what());

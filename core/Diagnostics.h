@@ -21,7 +21,7 @@ struct FrameStats {
     double maxSpeed = 0.0;
     double minJ = 1.0, maxJ = 1.0;
     std::size_t activeLeaves = 0;
-    std::size_t gridBytes = 0;
+    std::size_t gridBytes = 0;  ///< the grid's leaves and per-leaf tables (SparseGrid::contentBytes)
     int substeps = 0;
     int retries = 0;  ///< times this frame was restarted with half the time step
     double wallSeconds = 0.0;

@@ -29,25 +29,34 @@ struct SimState {
     double time = 0.0;                ///< [s]
     int frame = 0;                    ///< frames completed
     long long substeps = 0;           ///< substeps completed
+    int frameSubsteps = 0;            ///< substeps completed in the frame under way (0 between frames)
     int32_t nextId = 0;               ///< id of the next particle emitted
     int emittedFrame = -1;            ///< emitters' progress: the last frame whose emissions are done
     int retries = 0;                  ///< frames restarted so far (stability retries)
     StepBounds bounds;
     EnergyReference energy;
 
-    /// Calls f on every field but the species, in a fixed order (checkpoints write them in this order).
+    /// Calls f on every field but the species and the stiffness keys, in a fixed order (checkpoints write
+    /// them in this order).
     template <class F>
-    void forEachScalar(F&& f) {
-        f(time);
-        f(frame);
-        f(substeps);
-        f(nextId);
-        f(emittedFrame);
-        f(retries);
-        f(bounds.maxSpeed);
-        f(energy.set);
-        f(energy.min);
-        f(energy.scale);
+    void forEachScalar(F&& f) { each(*this, f); }
+    template <class F>
+    void forEachScalar(F&& f) const { each(*this, f); }
+
+private:
+    template <class Self, class F>
+    static void each(Self& s, F& f) {
+        f(s.time);
+        f(s.frame);
+        f(s.substeps);
+        f(s.frameSubsteps);
+        f(s.nextId);
+        f(s.emittedFrame);
+        f(s.retries);
+        f(s.bounds.maxSpeed);
+        f(s.energy.set);
+        f(s.energy.min);
+        f(s.energy.scale);
     }
 };
 

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <sstream>
 #include <type_traits>
 
 #include "core/GridUpdate.h"
@@ -117,6 +118,52 @@ double Simulation::cflTimeStep() const {
     return denominator > 0.0 ? 2.0 * reach / denominator : std::numeric_limits<double>::infinity();
 }
 
+Simulation::StepBound Simulation::stepBound() const {
+    const double target = settings_.targetDt(), cfl = cflTimeStep() * guard_.stepScale();
+    std::ostringstream cause;
+    if (target <= cfl) {
+        cause << "the target step 1 / (fps * substeps)";
+        return {target, cause.str()};
+    }
+    // The fastest wave of the species present, against the fastest particle.
+    float c = 0.0f;
+    std::string stiffest;
+    for (std::size_t s = 0; s < state_.species.size(); ++s)
+        std::visit(
+            [&](const auto& sp) {
+                using M = typename std::decay_t<decltype(sp)>::Material;
+                const float w = sp.size() ? M::waveSpeed(sp.params, state_.bounds.minStiffnessKey[s]) : 0.0f;
+                if (w > c) c = w, stiffest = sp.name;
+            },
+            state_.species[s]);
+    cause << "the CFL bound, C dx / (c + |v|max + |g| dt) with ";
+    if (c >= state_.bounds.maxSpeed) cause << "the wave speed c = " << c << " m/s of species " << stiffest;
+    else cause << "the fastest particle, |v| = " << state_.bounds.maxSpeed << " m/s";
+    if (guard_.stepScale() < 1.0) cause << ", shortened " << 1.0 / guard_.stepScale() << "x for a retry";
+    return {cfl, cause.str()};
+}
+
+void Simulation::checkCoordinates() const {
+    const double limit = kMaxGridCoordinate * settings_.dx;
+    for (std::size_t s = 0; s < state_.species.size(); ++s) {
+        const ParticleArrays& P = particlesOf(state_.species[s]);
+        const std::size_t far = tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, P.size(), kPermuteGrain), P.size(),
+            [&](const auto& r, std::size_t found) {
+                for (std::size_t i = r.begin(); i < r.end() && found == P.size(); ++i)
+                    if (!(P.x[i].cwiseAbs().maxCoeff() < limit)) found = i;
+                return found;
+            },
+            [](std::size_t a, std::size_t b) { return std::min(a, b); });
+        if (far == P.size()) continue;
+        std::ostringstream msg;
+        msg << "particle id " << P.id[far] << " of species " << std::visit([](const auto& sp) { return sp.name; }, state_.species[s])
+            << " is at (" << P.x[far].transpose() << ") m at frame " << state_.frame << ", beyond the grid's coordinate range of +-"
+            << limit << " m (2^30 cells of dx = " << settings_.dx << " m); keep the scene nearer the origin or use a larger dx";
+        throw LimitExceeded(msg.str());
+    }
+}
+
 void Simulation::refreshSpeedBound() {
     float& vmax = state_.bounds.maxSpeed;
     vmax = 0.0f;
@@ -213,35 +260,46 @@ double Simulation::substep(double dtMax) {
     return dt;
 }
 
-int Simulation::runFrameSubsteps() {
+void Simulation::runFrameSubsteps() {
     const double frameEnd = double(state_.frame + 1) / settings_.fps;
-    int steps = 0;
     while (state_.time < frameEnd) {
+        // A stop asked for (a signal) is honoured here, between two substeps, where the state is consistent.
+        if (stop_ && stop_->load(std::memory_order_relaxed)) throw Interrupted();
         const double remaining = frameEnd - state_.time;
         const double dtMax = std::min(settings_.targetDt(), cflTimeStep()) * guard_.stepScale();
         // Split the rest of the frame into equal substeps so that the last one lands on the frame time.
         const double pieces = std::max(1.0, std::ceil(remaining / dtMax - kFrameSplitSlack));
+        // Watchdog: a frame that would take more substeps than allowed stops here, saying what bounds the step.
+        if (double(state_.frameSubsteps) + pieces > double(settings_.maxSubstepsPerFrame)) {
+            const StepBound b = stepBound();
+            std::ostringstream msg;
+            msg << "frame " << state_.frame + 1 << " would need about " << double(state_.frameSubsteps) + pieces
+                << " substeps (dt = " << dtMax << " s, set by " << b.cause << "); the limit is simulation.max_substeps_per_frame = "
+                << settings_.maxSubstepsPerFrame;
+            throw LimitExceeded(msg.str());
+        }
         const double dt = remaining / pieces;
         const double taken = substep(dt);
-        ++steps;
+        ++state_.frameSubsteps;
         if (guard_.energyCheckDue(state_.substeps)) guard_.checkEnergy(state_, measure());
         if (pieces == 1.0 && taken == dt) state_.time = frameEnd;
     }
-    return steps;
 }
 
 FrameStats Simulation::advanceFrame() {
     const auto start = std::chrono::steady_clock::now();
     emitDue();
     if (!state_.energy.set) guard_.resetEnergyReference(state_.energy, measure());
-    int steps = 0;
     FrameStats st;
     const int retries = guard_.withRetries(state_, [&] {
-        steps = runFrameSubsteps();
+        runFrameSubsteps();
         st = measure();
         guard_.checkEnergy(state_, st);
     });
+    const int steps = state_.frameSubsteps;
+    state_.frameSubsteps = 0;
     ++state_.frame;
+    checkCoordinates();
     const std::size_t before = particleCount();
     emitDue();
     if (particleCount() != before) {
@@ -261,7 +319,7 @@ FrameStats Simulation::measure() const {
     st.frame = state_.frame;
     st.time = state_.time;
     st.activeLeaves = grid_.leafCount();
-    st.gridBytes = grid_.memoryBytes();
+    st.gridBytes = grid_.contentBytes();
     return st;
 }
 

@@ -5,6 +5,7 @@
 //  - the state (core/SimState.h): where the run is, one value that a retry copies and a checkpoint writes;
 //  - the step caches: the grid, the sort permutations, the permutation buffer, rebuilt from the state;
 //  - the stability guard (core/Stability.h) and the phase timings.
+#include <atomic>
 #include <cstddef>
 #include <limits>
 #include <memory>
@@ -30,6 +31,7 @@ struct SimulationSettings {
     bool adaptive = true;          ///< also bound dt by the CFL condition
     double cfl = 0.5;              ///< C in dt <= C dx / (c + |v|max)
     double maxDisplacement = 0.0;  ///< thesis rule: max node displacement per substep in cells; 0 = off
+    long long maxSubstepsPerFrame = 20000;  ///< watchdog: a frame that would need more stops the run
     StabilitySettings stability;
 
     double targetDt() const { return 1.0 / (fps * substepsPerFrame); }
@@ -81,10 +83,19 @@ public:
     FrameStats advanceFrame();
     /// One substep no longer than dtMax (and the CFL bound); returns the step taken.
     double substep(double dtMax);
+    /// While *flag is nonzero, advanceFrame stops at the next substep boundary by throwing Interrupted.
+    void setStopRequest(const std::atomic<int>* flag) { stop_ = flag; }
 
     /// dt (c + |v|max + |g| dt) <= C dx, i.e. C dx / (c + |v|max) without gravity: c from the stiffest
     /// species, |v|max from the last G2P, |g| dt the speed gravity adds during the step.
     double cflTimeStep() const;
+    /// What bounds the next step: its length and, in words, which rule set it (the target, or the CFL bound
+    /// from which species' wave speed or the fastest particle).
+    struct StepBound {
+        double dt;
+        std::string cause;
+    };
+    StepBound stepBound() const;
     /// Call after writing particle velocities directly, so that the next CFL step sees them.
     void refreshSpeedBound();
     FrameStats measure() const;
@@ -109,7 +120,8 @@ public:
     void resetPhaseSeconds() { phases_ = PhaseSeconds(); }
 
 private:
-    int runFrameSubsteps();
+    void runFrameSubsteps();
+    void checkCoordinates() const;
     void bin();
     float updateGrid(float dt);
     template <class S>
@@ -128,6 +140,7 @@ private:
     // Policy and timings.
     StabilityGuard guard_;
     PhaseSeconds phases_;
+    const std::atomic<int>* stop_ = nullptr;
 };
 
 }  // namespace mpm

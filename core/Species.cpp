@@ -22,4 +22,16 @@ bool defaultMaterialParams(const std::string& sceneName, AnyMaterialParams& out)
     return found;
 }
 
+bool defaultMaterialParamsAt(std::size_t index, AnyMaterialParams& out) {
+    std::size_t k = 0;
+    bool found = false;
+    forEachMaterial(AllMaterials{}, [&]<class M>() {
+        if (k++ == index) {
+            out = typename M::Params{};
+            found = true;
+        }
+    });
+    return found;
+}
+
 }  // namespace mpm

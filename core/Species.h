@@ -22,26 +22,22 @@ struct ParticleArrays {
     std::vector<uint16_t> set;   ///< index of the particle set that emitted it
 
     template <class F>
-    void forEachArray(F&& f) {
-        f(x);
-        f(v);
-        f(C);
-        f(mass);
-        f(volume0);
-        f(id);
-        f(set);
-    }
+    void forEachArray(F&& f) { each(*this, f); }
     template <class F>
-    void forEachArray(F&& f) const {
-        f(x);
-        f(v);
-        f(C);
-        f(mass);
-        f(volume0);
-        f(id);
-        f(set);
-    }
+    void forEachArray(F&& f) const { each(*this, f); }
     std::size_t size() const { return x.size(); }
+
+private:
+    template <class Self, class F>
+    static void each(Self& p, F& f) {
+        f(p.x);
+        f(p.v);
+        f(p.C);
+        f(p.mass);
+        f(p.volume0);
+        f(p.id);
+        f(p.set);
+    }
 };
 
 /// One material model with one parameter set and its particles.
@@ -117,5 +113,7 @@ inline int materialIndex(const AnySpecies& s) { return int(s.index()); }
 inline int materialIndex(const AnyMaterialParams& p) { return int(p.index()); }
 /// Default parameters of the material called `sceneName`, or nothing when no material has that name.
 bool defaultMaterialParams(const std::string& sceneName, AnyMaterialParams& out);
+/// Default parameters of the material at `index` in the list; false when there is none.
+bool defaultMaterialParamsAt(std::size_t index, AnyMaterialParams& out);
 
 }  // namespace mpm

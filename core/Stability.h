@@ -31,6 +31,20 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// A run that would exceed a limit (the substeps a frame may take, the grid's coordinate range): not a
+/// blow-up, so it is not retried. The message names the cause and what to change.
+class LimitExceeded : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Thrown at a substep boundary when a stop was asked for (Simulation::setStopRequest): the state is
+/// consistent, and a checkpoint of it resumes exactly.
+class Interrupted : public std::runtime_error {
+public:
+    Interrupted() : std::runtime_error("interrupted") {}
+};
+
 class StabilityGuard {
 public:
     /// gravity and dx set the energy floor of a body at rest: its weight over one cell.
@@ -55,6 +69,8 @@ public:
 
     /// Runs attempt() (a frame's substeps and checks). When it throws SimulationError and retries are left,
     /// restores `state` to what it was before and runs it again with half the step. Returns the retries used.
+    /// An interruption inside a frame that could be retried restores the frame's start too, so that a
+    /// checkpoint of the state replays the frame exactly (retries included).
     template <class F>
     int withRetries(SimState& state, F&& attempt) {
         std::optional<SimState> snapshot;
@@ -64,6 +80,10 @@ public:
                 attempt();
                 stepScale_ = 1.0;
                 return retries;
+            } catch (const Interrupted&) {
+                if (snapshot) state = *snapshot;
+                stepScale_ = 1.0;
+                throw;
             } catch (const SimulationError&) {
                 if (retries >= settings_.retries) {
                     stepScale_ = 1.0;

@@ -5,12 +5,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <regex>
 
 #include "io/AtomicFile.h"
 #include "io/PlyWriter.h"
-
-namespace fs = std::filesystem;
 
 namespace mpm {
 
@@ -38,7 +35,7 @@ std::vector<SurfaceGroup> surfaceGroups(const std::string& grouping, const Speci
 }
 }  // namespace
 
-FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory)
+FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar)
     : name_(scene.name),
       output_(scene.output),
       layout_(layout),
@@ -47,16 +44,10 @@ FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, co
     // The surface resolves the particle spacing of the first set; the sphere radius is a multiple of it.
     const double particlesPerCell = scene.sets.empty() ? 8.0 : scene.sets.front().particlesPerCell;
     particleSpacing_ = scene.settings.dx / std::cbrt(particlesPerCell);
-    fs::create_directories(dir_);
-    // Files of an earlier run of this scene: <scene>_NNNN.vdb, <scene>_points_NNNN.vdb, <scene>_NNNN.ply, ...
-    const std::regex old("^" + std::regex_replace(scene.name, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
-                         R"(_(points_)?[A-Za-z0-9_]*\d{4}\.(vdb|ply)$)");
-    for (const auto& e : fs::directory_iterator(dir_))
-        if (e.is_regular_file() && std::regex_match(e.path().filename().string(), old)) {
-            fs::remove(e.path());
-            ++removed_;
-        }
-    csv_ = FrameStats::csvHeader() + "\n";
+    std::error_code ec;
+    std::filesystem::create_directories(dir_, ec);
+    if (ec) throw WriteError(dir_, "cannot create the output directory: " + ec.message());
+    csv_ = statsSoFar.empty() ? FrameStats::csvHeader() + "\n" : statsSoFar;
     writeTextAtomically(dir_ + "/stats.csv", csv_);
     writeTextAtomically(dir_ + "/scene.json", scene.resolvedJson + "\n");
 }

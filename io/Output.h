@@ -14,9 +14,10 @@ namespace mpm {
 
 class FrameWriter {
 public:
-    /// Creates the directory. Frames of an earlier run of the same scene are removed (and reported in
-    /// removedFiles()), so old and new frames never mix. Keeps its own copy of what it needs of the scene.
-    FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory);
+    /// Writes scene.json and stats.csv (starting from statsSoFar, a resumed run's rows, or the header alone) into
+    /// the directory, made if need be. Removes nothing: clearing an earlier run is the caller's decision (io/Run.h).
+    /// Keeps its own copy of what it needs of the scene.
+    FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar = "");
 
     /// Writes frame files for the current state and appends the stats row.
     void writeFrame(int frame, const Simulation& sim, const FrameStats& stats);
@@ -24,7 +25,8 @@ public:
     void recordStats(const FrameStats& stats);
 
     const std::string& directory() const { return dir_; }
-    int removedFiles() const { return removed_; }
+    /// stats.csv as written so far (a checkpoint keeps it).
+    const std::string& statsCsv() const { return csv_; }
     std::string framePath(int frame, const char* suffix = "", const char* ext = ".vdb") const;
     double lastWriteSeconds() const { return lastWrite_; }
 
@@ -36,7 +38,6 @@ private:
     double particleSpacing_ = 0.0;  ///< what the surface resolves
     std::string dir_;
     std::string csv_;
-    int removed_ = 0;
     double lastWrite_ = 0;
 };
 

@@ -9,8 +9,7 @@
 namespace mpm {
 
 void writePly(const std::string& path, const PointCloud& f) {
-    writeAtomically(path, [&](const std::string& tmp) {
-        std::ofstream out(tmp, std::ios::binary);
+    writeAtomically(path, [&](std::ostream& out) {
         out << "ply\nformat binary_little_endian 1.0\ncomment sparse-mpm particles, SI units\nelement vertex " << f.size()
             << "\nproperty float x\nproperty float y\nproperty float z\nproperty float vx\nproperty float vy\n"
                "property float vz\nproperty int id\nend_header\n";
@@ -28,8 +27,6 @@ void writePly(const std::string& path, const PointCloud& f) {
             buf[i].id = f.id[i];
         }
         out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize(buf.size() * sizeof(Record)));
-        out.flush();
-        if (!out) throw std::runtime_error(path + ": write failed");
     });
 }
 

@@ -50,6 +50,8 @@ struct OutputDesc {
     bool ply = false;                  ///< binary PLY per frame (Blender reads it)
     double surfaceRadius = 1.0;        ///< sphere radius in particle spacings
     std::string surfaceGroup = "all";  ///< all | material | set: one surface grid per group
+    int checkpointEvery = 1;           ///< frames between checkpoints; 0 = none
+    int checkpointsKept = 2;
 };
 
 struct SceneDesc {

@@ -62,6 +62,11 @@ void simulationKeys(V& v, SceneDesc& d) {
                  .hi = 1e12,
                  .unit = "(largest factor by which the CFL step may shrink in one substep; 0 = off)"},
              b.stepCollapse);
+    v.integer(Key{.name = "max_substeps_per_frame",
+                  .help = "watchdog: a scene whose frames would need more substeps fails validation, and a run stops at a frame "
+                          "that would (instead of crawling on)",
+                  .lo = 1, .hi = 1e9},
+              s.maxSubstepsPerFrame);
     v.integer(
         Key{.name = "retries",
             .help = "when a check fires (these three, a non-finite value, neo-Hookean J <= 0): 0 stops the run naming cause, "
@@ -91,6 +96,12 @@ void outputKeys(V& v, OutputDesc& o) {
                  .hi = 10.0,
                  .unit = "particle spacings"},
              o.surfaceRadius);
+    v.integer(Key{.name = "checkpoint_every",
+                  .help = "write the whole simulation state every this many frames (`--resume` continues from it); 0 = never",
+                  .lo = 0, .hi = 1e9},
+              o.checkpointEvery);
+    v.integer(Key{.name = "checkpoints_kept", .help = "the newest checkpoints kept; older ones are removed", .lo = 1, .hi = 1000},
+              o.checkpointsKept);
     v.choice(Key{.name = "surface_group",
                  .help = "one `surface` grid, or `surface_<material>` / `surface_<set>` per group",
                  .noun = "surface grouping"},

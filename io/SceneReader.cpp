@@ -5,7 +5,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -32,6 +34,26 @@ std::string formatNumber(double v) {
     return s.str();
 }
 
+/// Deepest nesting of objects and lists a scene may have: scenes use 4 levels, and a limit keeps a hostile
+/// file from exhausting the stack of anything that walks the tree.
+constexpr int kMaxNesting = 64;
+/// Largest scene file read: scenes are a few kilobytes.
+constexpr std::uintmax_t kMaxSceneBytes = std::uintmax_t(64) << 20;
+/// A value quoted in an error message is cut to this many characters.
+constexpr std::size_t kMaxQuoted = 80;
+
+/// A JSON value as the user wrote it, cut short for messages.
+std::string quoted(const json& j) {
+    std::string s = j.dump(-1, ' ', false, json::error_handler_t::replace);
+    return s.size() > kMaxQuoted ? s.substr(0, kMaxQuoted) + "..." : s;
+}
+
+/// nlohmann's messages start with "[json.exception.parse_error.101] "; the user needs what follows.
+std::string withoutPrefix(const std::string& what) {
+    const std::size_t close = what.find("] ");
+    return what.rfind("[json.exception.", 0) == 0 && close != std::string::npos ? what.substr(close + 2) : what;
+}
+
 class JsonKeys {
 public:
     JsonKeys(const json& in, json& out, std::string path, const std::string& file)
@@ -51,11 +73,11 @@ public:
     void number(const Key& k, T& value) {
         double v = double(value);
         if (const json* j = take(k)) {
-            if (!j->is_number()) fail(k.name, "expected a number, got " + j->dump());
+            if (!j->is_number()) fail(k.name, "expected a number, got " + quoted(*j));
             v = j->get<double>();
             if (!std::isfinite(v) || v < k.lo || v > k.hi)
-                fail(k.name, "value " + formatNumber(v) + " out of range; allowed: " + formatNumber(k.lo) + " to " +
-                                 formatNumber(k.hi) + (k.unit.empty() ? "" : " " + std::string(k.unit)));
+                fail(k.name, "value " + quoted(*j) + " out of range; allowed: " + formatNumber(k.lo) + " to " + formatNumber(k.hi) +
+                                 (k.unit.empty() ? "" : " " + std::string(k.unit)));
         }
         out_[std::string(k.name)] = v;
         value = T(v);
@@ -64,18 +86,23 @@ public:
     void integer(const Key& k, T& value) {
         long long v = static_cast<long long>(value);
         if (const json* j = take(k)) {
-            if (!j->is_number_integer()) fail(k.name, "expected an integer, got " + j->dump());
-            v = j->get<long long>();
-            if (double(v) < k.lo || double(v) > k.hi)
-                fail(k.name, "value " + std::to_string(v) + " out of range; allowed: " + std::to_string((long long)k.lo) +
-                                 " to " + std::to_string((long long)k.hi));
+            // 1e6 is an integer too; 2^63 and more is out of range, and said so with its real value.
+            const bool whole = j->is_number_float() && std::isfinite(j->get<double>()) && std::floor(j->get<double>()) == j->get<double>();
+            if (!j->is_number_integer() && !whole) fail(k.name, "expected an integer, got " + quoted(*j));
+            const double d = j->is_number_unsigned() ? double(j->get<uint64_t>())
+                             : j->is_number_integer() ? double(j->get<long long>())
+                                                      : j->get<double>();
+            if (d < k.lo || d > k.hi)
+                fail(k.name, "value " + quoted(*j) + " out of range; allowed: " + std::to_string((long long)k.lo) + " to " +
+                                 std::to_string((long long)k.hi));
+            v = j->is_number_float() ? (long long)d : j->get<long long>();
         }
         out_[std::string(k.name)] = v;
         value = T(v);
     }
     void flag(const Key& k, bool& value) {
         if (const json* j = take(k)) {
-            if (!j->is_boolean()) fail(k.name, "expected true or false, got " + j->dump());
+            if (!j->is_boolean()) fail(k.name, "expected true or false, got " + quoted(*j));
             value = j->get<bool>();
         }
         out_[std::string(k.name)] = value;
@@ -84,9 +111,9 @@ public:
     void vec3(const Key& k, Eigen::Matrix<T, 3, 1>& value) {
         Vec3d v = value.template cast<double>();
         if (const json* j = take(k)) {
-            if (!j->is_array() || j->size() != 3) fail(k.name, "expected a list of 3 numbers, got " + j->dump());
+            if (!j->is_array() || j->size() != 3) fail(k.name, "expected a list of 3 numbers, got " + quoted(*j));
             for (int i = 0; i < 3; ++i) {
-                if (!(*j)[i].is_number()) fail(k.name, "expected a list of 3 numbers, got " + j->dump());
+                if (!(*j)[i].is_number()) fail(k.name, "expected a list of 3 numbers, got " + quoted(*j));
                 v[i] = (*j)[i].template get<double>();
                 if (!std::isfinite(v[i])) fail(k.name, "non-finite component");
             }
@@ -96,7 +123,7 @@ public:
     }
     void text(const Key& k, std::string& value) {
         if (const json* j = take(k)) {
-            if (!j->is_string()) fail(k.name, "expected a string, got " + j->dump());
+            if (!j->is_string()) fail(k.name, "expected a string, got " + quoted(*j));
             value = j->get<std::string>();
         }
         out_[std::string(k.name)] = value;
@@ -206,9 +233,20 @@ void readCollider(JsonKeys& n, SceneDesc& scene) {
 }  // namespace
 
 SceneDesc loadScene(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw SceneError(path + ": cannot open the file");
-    return parseScene(std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()), path);
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (ec || !fs::exists(st)) throw SceneError(path + ": cannot open the file: " + (ec ? ec.message() : "No such file or directory"));
+    if (fs::is_directory(st)) throw SceneError(path + ": is a directory, not a scene file");
+    if (!fs::is_regular_file(st)) throw SceneError(path + ": not a regular file");
+    const std::uintmax_t size = fs::file_size(path, ec);
+    if (!ec && size > kMaxSceneBytes)
+        throw SceneError(path + ": " + std::to_string(size) + " bytes; a scene file may have at most " + std::to_string(kMaxSceneBytes));
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw SceneError(path + ": cannot open the file: " + std::strerror(errno));
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw SceneError(path + ": cannot read the file: " + std::strerror(errno));
+    return parseScene(text, path);
 }
 
 SceneDesc parseScene(const std::string& text, const std::string& path) {
@@ -217,9 +255,18 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
     scene.name = std::filesystem::path(path).stem().string();
     json doc;
     try {
-        doc = json::parse(text);
+        // The nesting limit is enforced while parsing, before a hostile depth can be built.
+        doc = json::parse(text, [&](int depth, json::parse_event_t event, json&) {
+            if ((event == json::parse_event_t::object_start || event == json::parse_event_t::array_start) && depth >= kMaxNesting)
+                throw SceneError(path + ": objects and lists nested deeper than " + std::to_string(kMaxNesting) + " levels");
+            return true;
+        });
     } catch (const json::parse_error& e) {
-        throw SceneError(path + ": not valid JSON: " + e.what());
+        throw SceneError(path + ": not valid JSON: " + withoutPrefix(e.what()));
+    } catch (const json::out_of_range& e) {
+        throw SceneError(path + ": not valid JSON: a number is out of range (at most about 1.8e308): " + withoutPrefix(e.what()));
+    } catch (const json::exception& e) {
+        throw SceneError(path + ": not valid JSON: " + withoutPrefix(e.what()));
     }
     json resolved = json::object();
     JsonKeys root(doc, resolved, "", path);

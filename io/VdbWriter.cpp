@@ -1,5 +1,7 @@
 #include "io/VdbWriter.h"
 
+#include <nlohmann/json.hpp>
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/points/PointConversion.h>
 #include <openvdb/points/PointCount.h>
@@ -61,21 +63,19 @@ PointDataGrid::Ptr makePoints(const PointCloud& f, double voxelSize, bool full) 
     return grid;
 }
 
-std::string joinComma(const std::vector<std::string>& v) {
-    std::string s;
-    for (std::size_t i = 0; i < v.size(); ++i) s += (i ? "," : "") + v[i];
-    return s;
-}
+/// Names as a JSON array in a string: any name survives, commas, quotes and all.
+std::string jsonArray(const std::vector<std::string>& v) { return nlohmann::json(v).dump(); }
 
+/// Writes the grids through OpenVDB's stream writer into a checked atomic file (io/AtomicFile.h): a full disk
+/// is an error naming the file, never a truncated frame under its final name.
 void writeFile(const std::string& path, const openvdb::GridPtrVec& grids) {
-    writeAtomically(path, [&](const std::string& tmp) {
-        openvdb::io::File file(tmp);
-        file.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
+    writeAtomically(path, [&](std::ostream& out) {
+        openvdb::io::Stream stream(out);
+        stream.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
         openvdb::MetaMap meta;
         meta.insertMeta("up_axis", openvdb::StringMetadata("y"));
         meta.insertMeta("units", openvdb::StringMetadata("SI (m, m/s)"));
-        file.write(grids, meta);
-        file.close();
+        stream.write(grids, meta);
     });
 }
 
@@ -106,8 +106,8 @@ std::size_t writeVdbFrame(const VdbFrameRequest& r, const PointCloud& flat) {
     if (r.points) {
         auto points = makePoints(flat, r.pointVoxelSize, true);
         points->setName("points");
-        points->insertMeta("material_names", openvdb::StringMetadata(joinComma(r.materialNames)));
-        points->insertMeta("set_names", openvdb::StringMetadata(joinComma(r.setNames)));
+        points->insertMeta("material_names", openvdb::StringMetadata(jsonArray(r.materialNames)));
+        points->insertMeta("set_names", openvdb::StringMetadata(jsonArray(r.setNames)));
         (r.pointsPath.empty() ? volumes : pointGrids).push_back(points);
     }
     if (r.surface || r.density) {
@@ -149,6 +149,12 @@ PointsReadBack readVdbPoints(const std::string& path) {
     auto grid = openvdb::gridPtrCast<PointDataGrid>(base);
     if (!grid) throw std::runtime_error(path + ": grid \"points\" is not a PointDataGrid");
     PointsReadBack out;
+    auto names = [&](const char* key) {
+        const auto meta = grid->getMetadata<openvdb::StringMetadata>(key);
+        return meta ? nlohmann::json::parse(meta->value()).get<std::vector<std::string>>() : std::vector<std::string>{};
+    };
+    out.materialNames = names("material_names");
+    out.setNames = names("set_names");
     for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf) {
         openvdb::points::AttributeHandle<openvdb::Vec3f> P(leaf->constAttributeArray("P"));
         openvdb::points::AttributeHandle<openvdb::Vec3f> v(leaf->constAttributeArray("v"));

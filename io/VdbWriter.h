@@ -34,6 +34,7 @@ struct PointsReadBack {
     std::vector<Vec3d> x;
     std::vector<Vec3f> v;
     std::vector<int32_t> id, material, set;
+    std::vector<std::string> materialNames, setNames;  ///< from the grid's metadata
 };
 PointsReadBack readVdbPoints(const std::string& path);
 

@@ -32,6 +32,10 @@ inline constexpr int neighbourOfBlockNode(int a, int b, int c) {
     return neighbourIndex(a >> kLeafLog2, b >> kLeafLog2, c >> kLeafLog2);
 }
 
+/// Positions must stay within +-kMaxGridCoordinate cells of the origin: node coordinates are ints, floorToInt
+/// below is exact under 2^31, and the margin leaves room for a frame's travel (at most a cell per substep).
+inline constexpr double kMaxGridCoordinate = double(1 << 30);
+
 /// floor(t) as an int without a libm call (the portable x86-64 baseline has no SSE4.1 round instruction);
 /// exact for |t| < 2^31, which bounds the grid anyway.
 inline int floorToInt(double t) {

@@ -271,6 +271,14 @@ std::size_t SparseGrid::memoryBytes() const {
            histogram_.capacity() * sizeof(uint32_t) + leafCount_.capacity() * sizeof(uint32_t);
 }
 
+std::size_t SparseGrid::contentBytes() const {
+    // From the leaf count alone, so that the number depends on where the particles are, not on the history
+    // of the trees and buffers (a resumed run reports what an uninterrupted one does).
+    const std::size_t perLeaf = sizeof(MassTree::LeafNodeType) + sizeof(MomentumTree::LeafNodeType) + sizeof(LeafView) +
+                                2 * sizeof(std::array<uint32_t, kNeighbours>) + 2 * sizeof(NodeBox);
+    return leaves_.size() * perLeaf;
+}
+
 std::size_t SparseGrid::allocatedLeaves() const { return std::size_t(trees_->mass.leafCount()); }
 
 }  // namespace mpm

@@ -65,8 +65,11 @@ public:
     /// Workspace of the transfers, kept between substeps so that it is allocated once.
     std::vector<float>& transferScratch() { return transferScratch_; }
 
-    /// Bytes held by the grid trees and the leaf tables.
+    /// Bytes held by the grid trees, the leaf tables and the workspace (capacities: what the process holds).
     std::size_t memoryBytes() const;
+    /// Bytes of the grid's leaves (mass and momentum) and per-leaf tables: a function of the particles' places
+    /// alone, not of the run's history (stats.csv reports it, and a resumed run must report the same).
+    std::size_t contentBytes() const;
     /// Number of leaves allocated in the trees (equals leafCount() after rebuild).
     std::size_t allocatedLeaves() const;
 

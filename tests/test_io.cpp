@@ -9,6 +9,7 @@
 
 #include "io/AtomicFile.h"
 #include "io/Output.h"
+#include "io/Run.h"
 #include "io/Sampling.h"
 #include "io/Scene.h"
 #include "io/VdbWriter.h"
@@ -174,8 +175,8 @@ TEST(Output, InterruptedWriteLeavesNoPartialFile) {
     const std::string path = dir + "/frame.vdb";
     writeTextAtomically(path, "old complete frame");
     EXPECT_THROW(writeAtomically(path,
-                                 [](const std::string& tmp) {
-                                     std::ofstream(tmp) << "half a fr";
+                                 [](std::ostream& out) {
+                                     out << "half a fr";
                                      throw std::runtime_error("disk full");
                                  }),
                  std::runtime_error);
@@ -187,15 +188,25 @@ TEST(Output, InterruptedWriteLeavesNoPartialFile) {
     EXPECT_EQ(files, 1);  // no temporary left behind
 }
 
-TEST(Output, RerunRemovesOldFramesOfTheScene) {
+TEST(Output, RerunRemovesOldFramesOfTheSceneOnly) {
     const std::string dir = tempDir("rerun");
-    SceneDesc scene = loadScene(writeScene(dir, "rr.json", kValid));
+    const std::string scene = writeScene(dir, "rr.json", kValid);
     fs::create_directories(dir + "/f");
-    std::ofstream(dir + "/f/rr_0007.vdb") << "stale";
-    std::ofstream(dir + "/f/rr_points_0007.vdb") << "stale";
-    std::ofstream(dir + "/f/other_0007.vdb") << "keep";
-    FrameWriter writer(scene, speciesLayout(scene), dir + "/f");
-    EXPECT_EQ(writer.removedFiles(), 2);
+    for (const char* name : {"rr_0007.vdb", "rr_points_0007.vdb", "rr_checkpoint_0007.mpmc", "other_0007.vdb", "rr_break_0007.vdb",
+                             "rr_0007.vdb.tmp12345"})
+        std::ofstream(dir + "/f/" + name) << "stale";
+    RunOptions options;
+    options.outDir = dir + "/f";
+    int notes = 0;
+    RunEvents events;
+    events.note = [&](const std::string&) { ++notes; };
+    SceneRun run(scene, options, events);
     EXPECT_FALSE(fs::exists(dir + "/f/rr_0007.vdb"));
+    EXPECT_FALSE(fs::exists(dir + "/f/rr_points_0007.vdb"));
+    EXPECT_FALSE(fs::exists(dir + "/f/rr_checkpoint_0007.mpmc"));
+    EXPECT_FALSE(fs::exists(dir + "/f/rr_0007.vdb.tmp12345"));  // a killed run's temporary file
     EXPECT_TRUE(fs::exists(dir + "/f/other_0007.vdb"));
+    EXPECT_TRUE(fs::exists(dir + "/f/rr_break_0007.vdb"));      // a scene whose name starts with this one's
+    EXPECT_TRUE(fs::exists(dir + "/f/rr_0000.vdb"));             // the new run's initial state
+    EXPECT_EQ(notes, 2);                                         // both removals are reported
 }

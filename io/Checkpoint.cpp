@@ -1,0 +1,373 @@
+#include "io/Checkpoint.h"
+
+#include <blosc.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <regex>
+#include <thread>
+#include <type_traits>
+
+#include "io/AtomicFile.h"
+
+namespace fs = std::filesystem;
+
+namespace mpm {
+
+namespace {
+
+using json = nlohmann::ordered_json;
+
+constexpr char kMagic[8] = {'M', 'P', 'M', 'C', 'K', 'P', 'T', '1'};
+constexpr char kTrailerMagic[8] = {'M', 'P', 'M', 'C', 'E', 'N', 'D', '1'};
+/// Bytes per Blosc chunk: well under Blosc's 2 GB limit, large enough to compress well.
+constexpr std::size_t kChunkBytes = std::size_t(64) << 20;
+constexpr int kBloscLevel = 5;
+/// Longest header accepted: a resolved scene and the stats rows of a long run fit many times over.
+constexpr uint32_t kMaxHeaderBytes = 1u << 30;
+
+/// A 64-bit FNV-1a style hash over 8-byte words: any flipped or missing byte changes it. It streams: the
+/// bytes may come in pieces of any size and hash as if they came at once.
+class Checksum {
+public:
+    void add(const char* p, std::size_t n) {
+        while (pending_ > 0 && n > 0) {
+            tail_[pending_++] = *p++;
+            --n;
+            if (pending_ == 8) word(tail_), pending_ = 0;
+        }
+        for (; n >= 8; p += 8, n -= 8) word(p);
+        for (; n > 0; --n) tail_[pending_++] = *p++;
+    }
+    uint64_t value() const {
+        uint64_t h = h_;
+        for (std::size_t i = 0; i < pending_; ++i) h = (h ^ uint64_t(static_cast<unsigned char>(tail_[i]))) * kPrime;
+        return h;
+    }
+
+private:
+    static constexpr uint64_t kPrime = 1099511628211ull;
+    void word(const char* p) {
+        uint64_t w;
+        std::memcpy(&w, p, 8);
+        h_ = (h_ ^ w) * kPrime;
+        h_ ^= h_ >> 29;
+    }
+    uint64_t h_ = 14695981039346656037ull;
+    char tail_[8] = {};
+    std::size_t pending_ = 0;
+};
+
+/// Writes to the atomic file's stream while hashing what it writes.
+class Out {
+public:
+    explicit Out(std::ostream& os) : os_(os) {}
+    void bytes(const void* p, std::size_t n) {
+        sum_.add(static_cast<const char*>(p), n);
+        os_.write(static_cast<const char*>(p), std::streamsize(n));
+    }
+    template <class T> void value(const T& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        bytes(&v, sizeof(T));
+    }
+    /// A per-particle array: element size, count, then Blosc chunks of (raw bytes, compressed bytes, data).
+    template <class T> void array(const std::vector<T>& a) {
+        // Eigen's fixed-size types are plain values without being trivially copyable in the language's sense.
+        static_assert(std::is_trivially_destructible_v<T>, "per-particle attributes are plain values");
+        value(uint32_t(sizeof(T)));
+        value(uint64_t(a.size()));
+        const char* src = reinterpret_cast<const char*>(a.data());
+        std::size_t left = a.size() * sizeof(T);
+        std::vector<char> packed;
+        const int threads = int(std::min(4u, std::max(1u, std::thread::hardware_concurrency())));
+        while (left > 0) {
+            const std::size_t raw = std::min(left, kChunkBytes - kChunkBytes % sizeof(T));
+            packed.resize(raw + BLOSC_MAX_OVERHEAD);
+            const int c = blosc_compress_ctx(kBloscLevel, BLOSC_SHUFFLE, elementSize<T>(), raw, src, packed.data(), packed.size(),
+                                             "lz4", 0, threads);
+            if (c <= 0) throw std::runtime_error("checkpoint: Blosc could not compress an array");
+            value(uint32_t(raw));
+            value(uint32_t(c));
+            bytes(packed.data(), std::size_t(c));
+            src += raw;
+            left -= raw;
+        }
+    }
+    uint64_t checksum() const { return sum_.value(); }
+
+private:
+    /// The shuffle works on the scalar a value is made of (a float of a Vec3f, a double of a Vec3d).
+    template <class T> static std::size_t elementSize() {
+        if constexpr (std::is_arithmetic_v<T>) return sizeof(T);
+        else return sizeof(typename T::Scalar);
+    }
+    std::ostream& os_;
+    Checksum sum_;
+};
+
+/// Reads a whole checkpoint's bytes with bounds checks: a short file is a named error, never a crash.
+class In {
+public:
+    In(const char* p, std::size_t n, std::string path) : p_(p), end_(p + n), path_(std::move(path)) {}
+    [[noreturn]] void fail(const std::string& what) const { throw CheckpointError(path_ + ": " + what); }
+    void bytes(void* out, std::size_t n) {
+        if (std::size_t(end_ - p_) < n) fail("truncated");
+        std::memcpy(out, p_, n);
+        p_ += n;
+    }
+    template <class T> T value() {
+        T v;
+        bytes(&v, sizeof(T));
+        return v;
+    }
+    template <class T> void array(std::vector<T>& a) {
+        if (value<uint32_t>() != sizeof(T)) fail("an array's element size differs from this program's");
+        const uint64_t count = value<uint64_t>();
+        if (count > uint64_t(end_ - p_) * 1024) fail("an array claims more elements than the file can hold");  // Blosc ratio bound
+        a.resize(count);
+        char* dst = reinterpret_cast<char*>(a.data());
+        std::size_t left = count * sizeof(T);
+        while (left > 0) {
+            const uint32_t raw = value<uint32_t>(), packed = value<uint32_t>();
+            if (raw == 0 || raw > left || std::size_t(end_ - p_) < packed) fail("truncated or corrupt array chunk");
+            std::size_t nbytes = 0, cbytes = 0, block = 0;
+            blosc_cbuffer_sizes(p_, &nbytes, &cbytes, &block);
+            if (nbytes != raw || cbytes != packed) fail("corrupt array chunk");
+            if (blosc_decompress_ctx(p_, dst, raw, 1) != int(raw)) fail("an array chunk does not decompress");
+            p_ += packed;
+            dst += raw;
+            left -= raw;
+        }
+    }
+    std::string text(std::size_t n) {
+        if (std::size_t(end_ - p_) < n) fail("truncated");
+        std::string s(p_, n);
+        p_ += n;
+        return s;
+    }
+    bool atEnd() const { return p_ == end_; }
+
+private:
+    const char* p_;
+    const char* end_;
+    std::string path_;
+};
+
+json headerOf(const CheckpointInfo& info) {
+    json h = json::object();
+    h["format"] = info.format;
+    h["program"] = info.program;
+    h["scene_name"] = info.sceneName;
+    h["frame"] = info.frame;
+    h["time"] = info.time;
+    h["mid_frame"] = info.midFrame;
+    h["scene_hash"] = info.sceneHash;
+    h["scene"] = info.sceneJson;
+    h["stats_csv"] = info.statsCsv;
+    return h;
+}
+
+CheckpointInfo infoOf(const json& h, const std::string& path) {
+    try {
+        CheckpointInfo info;
+        info.format = h.at("format").get<int>();
+        info.program = h.at("program").get<std::string>();
+        info.sceneName = h.at("scene_name").get<std::string>();
+        info.frame = h.at("frame").get<int>();
+        info.time = h.at("time").get<double>();
+        info.midFrame = h.at("mid_frame").get<bool>();
+        info.sceneHash = h.at("scene_hash").get<std::string>();
+        info.sceneJson = h.at("scene").get<std::string>();
+        info.statsCsv = h.at("stats_csv").get<std::string>();
+        return info;
+    } catch (const json::exception& e) {
+        throw CheckpointError(path + ": header: " + e.what());
+    }
+}
+
+/// The file's bytes, its magic, header and trailer checked. Returns the header and where the payload starts.
+struct Verified {
+    std::vector<char> bytes;
+    CheckpointInfo info;
+    std::size_t payload = 0, payloadEnd = 0;
+};
+
+Verified verify(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw CheckpointError(path + ": cannot open: " + std::strerror(errno));
+    Verified v;
+    v.bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    const std::vector<char>& b = v.bytes;
+    const std::size_t minimum = sizeof(kMagic) + sizeof(uint32_t) + sizeof(uint64_t) + sizeof(kTrailerMagic);
+    if (b.size() < minimum) throw CheckpointError(path + ": truncated (" + std::to_string(b.size()) + " bytes)");
+    if (std::memcmp(b.data(), kMagic, sizeof(kMagic)) != 0) throw CheckpointError(path + ": not a checkpoint of this program");
+    if (std::memcmp(b.data() + b.size() - sizeof(kTrailerMagic), kTrailerMagic, sizeof(kTrailerMagic)) != 0)
+        throw CheckpointError(path + ": truncated (no trailer)");
+    const std::size_t sumAt = b.size() - sizeof(kTrailerMagic) - sizeof(uint64_t);
+    uint64_t stored;
+    std::memcpy(&stored, b.data() + sumAt, sizeof(stored));
+    Checksum sum;
+    sum.add(b.data(), sumAt);
+    if (sum.value() != stored) throw CheckpointError(path + ": checksum mismatch (the file is corrupt)");
+    uint32_t headerBytes;
+    std::memcpy(&headerBytes, b.data() + sizeof(kMagic), sizeof(headerBytes));
+    const std::size_t headerAt = sizeof(kMagic) + sizeof(uint32_t);
+    if (headerBytes > kMaxHeaderBytes || headerAt + headerBytes > sumAt) throw CheckpointError(path + ": corrupt header length");
+    json h;
+    try {
+        h = json::parse(b.begin() + std::ptrdiff_t(headerAt), b.begin() + std::ptrdiff_t(headerAt + headerBytes));
+    } catch (const json::exception& e) {
+        throw CheckpointError(path + ": header is not valid JSON: " + e.what());
+    }
+    v.info = infoOf(h, path);
+    if (v.info.format != kCheckpointFormat)
+        throw CheckpointError(path + ": format " + std::to_string(v.info.format) + ", this program reads format " +
+                              std::to_string(kCheckpointFormat));
+    v.payload = headerAt + headerBytes;
+    v.payloadEnd = sumAt;
+    return v;
+}
+
+}  // namespace
+
+void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const SimState& state) {
+    writeAtomically(path, [&](std::ostream& os) {
+        Out out(os);
+        out.bytes(kMagic, sizeof(kMagic));
+        const std::string header = headerOf(info).dump();
+        out.value(uint32_t(header.size()));
+        out.bytes(header.data(), header.size());
+        state.forEachScalar([&](const auto& v) { out.value(v); });
+        out.array(state.bounds.minStiffnessKey);
+        out.value(uint32_t(state.species.size()));
+        for (const AnySpecies& s : state.species)
+            std::visit(
+                [&](const auto& sp) {
+                    using P = std::decay_t<decltype(sp.params)>;
+                    static_assert(std::is_trivially_copyable_v<P>, "material parameters are plain values");
+                    out.value(uint32_t(s.index()));
+                    out.value(uint32_t(sp.name.size()));
+                    out.bytes(sp.name.data(), sp.name.size());
+                    out.value(uint32_t(sizeof(P)));
+                    out.bytes(&sp.params, sizeof(P));
+                    uint32_t arrays = 0;
+                    sp.forEachArray([&](const auto&) { ++arrays; });
+                    out.value(arrays);
+                    sp.forEachArray([&](const auto& a) { out.array(a); });
+                },
+                s);
+        const uint64_t sum = out.checksum();
+        os.write(reinterpret_cast<const char*>(&sum), sizeof(sum));
+        os.write(kTrailerMagic, sizeof(kTrailerMagic));
+    });
+}
+
+CheckpointInfo readCheckpointInfo(const std::string& path) { return verify(path).info; }
+
+Checkpoint readCheckpoint(const std::string& path) {
+    const Verified v = verify(path);
+    In in(v.bytes.data() + v.payload, v.payloadEnd - v.payload, path);
+    Checkpoint c;
+    c.info = v.info;
+    SimState& s = c.state;
+    s.forEachScalar([&](auto& x) { x = in.value<std::decay_t<decltype(x)>>(); });
+    in.array(s.bounds.minStiffnessKey);
+    const uint32_t species = in.value<uint32_t>();
+    if (species != s.bounds.minStiffnessKey.size()) in.fail("species count and step bounds disagree");
+    for (uint32_t k = 0; k < species; ++k) {
+        const uint32_t material = in.value<uint32_t>();
+        AnyMaterialParams params;
+        if (!defaultMaterialParamsAt(material, params)) in.fail("unknown material index " + std::to_string(material));
+        const std::string name = in.text(in.value<uint32_t>());
+        const uint32_t paramBytes = in.value<uint32_t>();
+        AnySpecies sp = makeSpecies(name, params);
+        std::visit(
+            [&](auto& sps) {
+                using P = std::decay_t<decltype(sps.params)>;
+                if (paramBytes != sizeof(P)) in.fail("parameters of species " + name + " have another size");
+                in.bytes(&sps.params, sizeof(P));
+                uint32_t arrays = 0;
+                sps.forEachArray([&](const auto&) { ++arrays; });
+                if (in.value<uint32_t>() != arrays) in.fail("species " + name + " has another number of arrays");
+                sps.forEachArray([&](auto& a) { in.array(a); });
+                bool same = true;
+                sps.forEachArray([&](const auto& a) { same = same && a.size() == sps.size(); });
+                if (!same) in.fail("the arrays of species " + name + " differ in length");
+            },
+            sp);
+        s.species.push_back(std::move(sp));
+    }
+    if (!in.atEnd()) in.fail("unexpected bytes after the last species");
+    return c;
+}
+
+std::string checkpointPath(const std::string& dir, const std::string& scene, int frame) {
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), "%04d", frame);
+    return dir + "/" + scene + "_checkpoint_" + buf + ".mpmc";
+}
+
+std::vector<std::pair<int, std::string>> listCheckpoints(const std::string& dir, const std::string& scene) {
+    std::vector<std::pair<int, std::string>> out;
+    std::error_code ec;
+    const std::string prefix = scene + "_checkpoint_";
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+        const std::string name = e.path().filename().string();
+        if (name.size() <= prefix.size() + 5 || name.compare(0, prefix.size(), prefix) != 0) continue;
+        const std::string rest = name.substr(prefix.size());
+        const std::size_t dot = rest.find('.');
+        if (dot == std::string::npos || dot < 4 || rest.substr(dot) != ".mpmc") continue;
+        if (!std::all_of(rest.begin(), rest.begin() + std::ptrdiff_t(dot), [](char c) { return c >= '0' && c <= '9'; })) continue;
+        out.emplace_back(std::stoi(rest.substr(0, dot)), e.path().string());
+    }
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    return out;
+}
+
+std::string sceneIdentity(const std::string& resolvedJson) {
+    json j = json::parse(resolvedJson);
+    j.erase("output");
+    if (j.contains("simulation") && j["simulation"].is_object()) j["simulation"].erase("threads");
+    return j.dump();
+}
+
+std::string sceneHash(const std::string& identity) {
+    Checksum sum;
+    sum.add(identity.data(), identity.size());
+    char buf[24];
+    std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(sum.value()));
+    return buf;
+}
+
+namespace {
+void diff(const json& a, const json& b, const std::string& path, std::vector<std::string>& out, std::size_t limit) {
+    if (out.size() >= limit || a == b) return;
+    if (a.is_object() && b.is_object()) {
+        for (auto it = a.begin(); it != a.end(); ++it) {
+            if (b.contains(it.key())) diff(it.value(), b.at(it.key()), path + "/" + it.key(), out, limit);
+            else if (out.size() < limit) out.push_back(path + "/" + it.key() + ": removed");
+        }
+        for (auto it = b.begin(); it != b.end(); ++it)
+            if (!a.contains(it.key()) && out.size() < limit) out.push_back(path + "/" + it.key() + ": added");
+        return;
+    }
+    const auto primitive = [](const json& v) { return std::all_of(v.begin(), v.end(), [](const json& e) { return e.is_primitive(); }); };
+    if (a.is_array() && b.is_array() && a.size() == b.size() && !(primitive(a) && primitive(b))) {
+        for (std::size_t i = 0; i < a.size(); ++i) diff(a[i], b[i], path + "/" + std::to_string(i), out, limit);
+        return;
+    }
+    out.push_back((path.empty() ? "/" : path) + ": " + a.dump() + " -> " + b.dump());
+}
+}  // namespace
+
+std::vector<std::string> sceneDifferences(const std::string& before, const std::string& after, std::size_t limit) {
+    std::vector<std::string> out;
+    diff(json::parse(before), json::parse(after), "", out, limit);
+    return out;
+}
+
+}  // namespace mpm

@@ -1,0 +1,175 @@
+#include "io/Run.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <limits>
+#include <regex>
+
+#include "io/AtomicFile.h"
+#include "io/Checkpoint.h"
+#include "io/SceneBudget.h"
+#include "io/SceneReader.h"
+
+#ifndef MPM_VERSION
+#define MPM_VERSION "unknown"
+#endif
+
+namespace fs = std::filesystem;
+
+namespace mpm {
+
+namespace {
+
+std::string regexEscape(const std::string& s) { return std::regex_replace(s, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)"); }
+
+/// Exactly this scene's frame files: <scene>_NNNN.vdb|ply and <scene>_points_NNNN.vdb, nothing of a scene
+/// whose name merely starts with this one's (a scene "dam" does not own "dam_break_0004.vdb").
+std::regex framesOf(const std::string& scene) { return std::regex("^" + regexEscape(scene) + R"(_(points_)?[0-9]{4,}\.(vdb|ply)$)"); }
+std::regex checkpointsOf(const std::string& scene) { return std::regex("^" + regexEscape(scene) + R"(_checkpoint_[0-9]{4,}\.mpmc$)"); }
+/// The temporary files this program writes, of any scene (one run per directory: none is in use now).
+const std::regex kTemporary(R"(^(.+_(points_|checkpoint_)?[0-9]{4,}\.(vdb|ply|mpmc)|stats\.csv|scene\.json)\.tmp[0-9]+$)");
+
+}  // namespace
+
+SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents events)
+    : scene_(loadScene(scenePath)), options_(std::move(options)), events_(std::move(events)) {
+    // Budgets before work: a scene that cannot run here fails now, with the estimate and what to change.
+    checkBudget(scene_, estimateBudget(scene_, false));
+    last_ = options_.lastFrame < 0 ? scene_.frames : options_.lastFrame;
+    dir_ = options_.outDir.empty() ? scene_.output.directory : options_.outDir;
+    std::error_code ec;
+    fs::create_directories(dir_, ec);
+    if (ec) throw WriteError(dir_, "cannot create the output directory: " + ec.message());
+    lock_ = std::make_unique<DirectoryLock>(dir_);
+    if (!lock_->takenOverFrom().empty())
+        events_.warning("took over the lock of " + dir_ + " from a run that is gone (" + lock_->takenOverFrom() + ")");
+    removeStaleTemporaries();
+    sim_ = buildSimulation(scene_);
+    layout_ = speciesLayout(scene_);
+    identity_ = sceneIdentity(scene_.resolvedJson);
+    hash_ = sceneHash(identity_);
+    chooseStart();
+    writer_ = std::make_unique<FrameWriter>(scene_, layout_, dir_, statsSoFar_);
+    if (start_ == 0) {
+        const FrameStats st = sim_->measure();
+        if (options_.firstFrame == 0) writer_->writeFrame(0, *sim_, st);
+        else writer_->recordStats(st);
+    }
+}
+
+SceneRun::~SceneRun() = default;
+
+void SceneRun::removeStaleTemporaries() {
+    int removed = 0;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir_, ec))
+        if (e.is_regular_file() && std::regex_match(e.path().filename().string(), kTemporary) && fs::remove(e.path(), ec)) ++removed;
+    if (removed) events_.note("removed " + std::to_string(removed) + " temporary files of an earlier run that was stopped");
+}
+
+void SceneRun::removeOldOutputs() {
+    const std::regex frames = framesOf(scene_.name), checkpoints = checkpointsOf(scene_.name);
+    int removed = 0;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir_, ec)) {
+        const std::string name = e.path().filename().string();
+        if (e.is_regular_file() && (std::regex_match(name, frames) || std::regex_match(name, checkpoints)) && fs::remove(e.path(), ec))
+            ++removed;
+    }
+    if (removed) events_.note("removed " + std::to_string(removed) + " frame and checkpoint files of an earlier run of this scene");
+}
+
+void SceneRun::chooseStart() {
+    if (!options_.resume && !options_.framesGiven) {
+        removeOldOutputs();
+        sim_->emitDue();
+        return;
+    }
+    // The newest checkpoint that can produce the first frame asked for, valid and of this scene.
+    const int newest = options_.framesGiven ? options_.firstFrame - 1 : std::numeric_limits<int>::max();
+    for (const auto& [frame, path] : listCheckpoints(dir_, scene_.name)) {
+        if (frame > newest) continue;
+        Checkpoint c;
+        try {
+            c = readCheckpoint(path);
+        } catch (const CheckpointError& e) {
+            events_.warning(std::string(e.what()) + "; trying the one before");
+            continue;
+        }
+        if (c.info.sceneHash != hash_) {
+            std::string changes;
+            for (const std::string& d : sceneDifferences(c.info.sceneJson, identity_)) changes += (changes.empty() ? "" : "; ") + d;
+            if (options_.resume && !options_.force)
+                throw SceneError(scene_.file + ": the scene changed since " + path + " was written (" + changes +
+                                 "); run without --resume to start over, or add --force to resume anyway");
+            if (!options_.force) {
+                events_.warning("not starting from " + path + ": written for another version of the scene (" + changes + ")");
+                continue;
+            }
+            events_.warning("resuming from " + path + " although the scene changed (" + changes + ")");
+        }
+        try {
+            sim_->restore(std::move(c.state));
+        } catch (const std::invalid_argument& e) {
+            throw SceneError(scene_.file + ": " + path + " cannot continue this scene: " + e.what());
+        }
+        statsSoFar_ = c.info.statsCsv;
+        start_ = c.info.frame;
+        events_.note("continuing from " + path + " (frame " + std::to_string(start_) + (c.info.midFrame ? ", inside frame " +
+                     std::to_string(start_ + 1) : "") + ", t = " + std::to_string(c.info.time) + " s)");
+        return;
+    }
+    if (options_.resume)
+        throw SceneError(dir_ + ": no usable checkpoint of scene " + scene_.name +
+                         (options_.framesGiven ? " before frame " + std::to_string(options_.firstFrame) : std::string()) +
+                         " to resume from; run without --resume to start from frame 0");
+    sim_->emitDue();  // --frames without a checkpoint: simulate from frame 0, write only the frames asked for
+}
+
+void SceneRun::saveCheckpoint() {
+    const SimState& s = sim_->state();
+    CheckpointInfo info;
+    info.format = kCheckpointFormat;
+    info.program = std::string("sparse-mpm ") + MPM_VERSION;
+    info.sceneName = scene_.name;
+    info.frame = s.frame;
+    info.time = s.time;
+    info.midFrame = s.frameSubsteps > 0;
+    info.sceneHash = hash_;
+    info.sceneJson = identity_;
+    info.statsCsv = writer_->statsCsv();
+    const std::string path = checkpointPath(dir_, scene_.name, s.frame);
+    writeCheckpoint(path, info, s);
+    lastCheckpoint_ = path;
+    // Keep the newest ones.
+    const auto all = listCheckpoints(dir_, scene_.name);
+    std::error_code ec;
+    for (std::size_t i = std::size_t(scene_.output.checkpointsKept); i < all.size(); ++i) fs::remove(all[i].second, ec);
+}
+
+void SceneRun::run(const std::atomic<int>* stop) {
+    sim_->setStopRequest(stop);
+    const int every = scene_.output.checkpointEvery;
+    for (int f = start_ + 1; f <= last_; ++f) {
+        FrameStats st;
+        try {
+            st = sim_->advanceFrame();
+        } catch (const Interrupted&) {
+            saveCheckpoint();
+            throw;
+        }
+        if (f >= options_.firstFrame) writer_->writeFrame(f, *sim_, st);
+        else writer_->recordStats(st);
+        // On a stop request a checkpoint is written even when the scene asks for none.
+        const bool saved = every > 0 && (f % every == 0 || f == last_);
+        if (saved) saveCheckpoint();
+        events_.frameDone(f, last_, st, f >= options_.firstFrame ? writer_->lastWriteSeconds() : 0.0);
+        // A stop asked for while the frame was written: the state is at a frame boundary.
+        if (stop && stop->load() && f < last_) {
+            if (!saved) saveCheckpoint();
+            throw Interrupted();
+        }
+    }
+}
+
+}  // namespace mpm

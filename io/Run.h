@@ -1,0 +1,75 @@
+#pragma once
+// A run of a scene into an output directory, safe with the user's data:
+//  - one run per directory (io/DirectoryLock.h); temporary files of an earlier killed run are removed;
+//  - a fresh run removes exactly this scene's frames and checkpoints, never another scene's;
+//  - checkpoints every output.checkpoint_every frames (io/Checkpoint.h), the newest output.checkpoints_kept
+//    kept; `resume` continues from the newest valid one, with the bits an uninterrupted run has;
+//  - `--frames A:B` writes only frames A..B, deletes nothing, and starts from a checkpoint before A if any;
+//  - a stop request (a signal) stops at the next substep boundary, writes a checkpoint and throws Interrupted.
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "io/DirectoryLock.h"
+#include "io/Output.h"
+#include "io/SceneBuilder.h"
+#include "io/SceneDesc.h"
+
+namespace mpm {
+
+struct RunOptions {
+    std::string outDir;        ///< empty: the scene's output.directory
+    int firstFrame = 0;        ///< the frames written are firstFrame .. lastFrame
+    int lastFrame = -1;        ///< -1: the scene's last frame
+    bool framesGiven = false;  ///< --frames: write only those, delete nothing
+    bool resume = false;       ///< continue from the newest valid checkpoint
+    bool force = false;        ///< resume even when the scene changed since the checkpoint
+};
+
+/// What the front end is told while the run goes.
+struct RunEvents {
+    std::function<void(const std::string&)> note = [](const std::string&) {};
+    std::function<void(const std::string&)> warning = [](const std::string&) {};
+    /// After each frame: the frame, the last frame, its stats and the seconds its files took to write.
+    std::function<void(int, int, const FrameStats&, double)> frameDone = [](int, int, const FrameStats&, double) {};
+};
+
+class SceneRun {
+public:
+    /// Reads and checks the scene (SceneError), takes the directory (LockError, WriteError), cleans up after an
+    /// earlier run and picks where to start (a checkpoint or frame 0).
+    SceneRun(const std::string& scenePath, RunOptions options, RunEvents events);
+    ~SceneRun();
+
+    /// Simulates and writes the remaining frames. While *stop is nonzero the run stops at the next substep
+    /// boundary, writes a checkpoint and throws Interrupted.
+    void run(const std::atomic<int>* stop);
+
+    const SceneDesc& scene() const { return scene_; }
+    const Simulation& simulation() const { return *sim_; }
+    const std::string& directory() const { return dir_; }
+    int startFrame() const { return start_; }
+    int lastFrame() const { return last_; }
+    /// The checkpoint written last (empty when none was).
+    const std::string& lastCheckpoint() const { return lastCheckpoint_; }
+
+private:
+    void chooseStart();
+    void saveCheckpoint();
+    void removeStaleTemporaries();
+    void removeOldOutputs();
+
+    SceneDesc scene_;
+    RunOptions options_;
+    RunEvents events_;
+    std::string dir_;
+    std::unique_ptr<DirectoryLock> lock_;
+    std::unique_ptr<Simulation> sim_;
+    SpeciesLayout layout_;
+    std::unique_ptr<FrameWriter> writer_;
+    std::string identity_, hash_, statsSoFar_, lastCheckpoint_;
+    int start_ = 0, last_ = 0;
+};
+
+}  // namespace mpm

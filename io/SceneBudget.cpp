@@ -1,0 +1,169 @@
+#include "io/SceneBudget.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "io/Sampling.h"
+
+namespace mpm {
+
+namespace {
+
+/// Sets estimated to hold up to this many particles are sampled, so that validate counts them exactly.
+constexpr double kSampleUpTo = 2e6;
+/// Bytes per particle besides its arrays: the sort destination and the halo workspace of P2G.
+constexpr double kEngineBytesPerParticle = 4.0 + 3.0;
+/// Grid nodes per particle at one particle per cell, counting partly filled leaves and halo leaves (measured
+/// on the benchmark block: about 143 bytes per water particle in all at 8 per cell).
+constexpr double kNodesPerCellOfParticles = 4.0;
+constexpr double kBytesPerNode = 4.0 * sizeof(float);
+/// Writing a frame gathers the particles into flat arrays and builds the VDB points grid.
+constexpr double kOutputBytesPerParticle = 80.0;
+
+std::string gib(double bytes) {
+    std::ostringstream s;
+    s.precision(3);
+    s << bytes / double(1u << 30) << " GiB";
+    return s.str();
+}
+
+/// Bytes of one particle of material M: every per-particle array, and the permutation buffer's share (it
+/// is as wide as the widest array).
+template <class M>
+double particleBytes() {
+    Species<M> s;
+    double sum = 0.0, widest = 0.0;
+    s.forEachArray([&](const auto& a) {
+        const double b = double(sizeof(typename std::decay_t<decltype(a)>::value_type));
+        sum += b;
+        widest = std::max(widest, b);
+    });
+    return sum + widest;
+}
+
+/// Wave speed of a material at rest with these parameters.
+template <class M>
+float restWaveSpeed(const typename M::Params& p) {
+    Species<M> s;
+    s.params = p;
+    if constexpr (requires { s.state.appendRest(1, s.params); }) s.state.appendRest(1, s.params);
+    else s.state.appendRest(1);
+    return M::waveSpeed(p, M::stiffnessKey(s.state, 0));
+}
+
+long long emissionsWithin(const ParticleSetDesc& d, int frames) {
+    long long n = 0;
+    const long long period = d.pauseFrames + 1;
+    const long long last = std::min<long long>((long long)d.startFrame + d.durationFrames - 1, frames);
+    if (last >= d.startFrame) n = (last - d.startFrame) / period + 1;
+    return n;
+}
+
+double largestCoordinate(const SetShape& shape) {
+    Vec3d lo, hi;
+    std::visit([&](const auto& s) { s.bounds(lo, hi); }, shape);
+    return std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+}
+
+}  // namespace
+
+SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly) {
+    SceneBudget b;
+    const SimulationSettings& st = scene.settings;
+    const double dx = st.dx, cell = dx * dx * dx;
+    float c = 0.0f, vmax = 0.0f;
+    std::string stiffest;
+    for (std::size_t i = 0; i < scene.sets.size(); ++i) {
+        const ParticleSetDesc& d = scene.sets[i];
+        const std::string where = "/sets/" + std::to_string(i);
+        SetBudget s;
+        s.name = d.name;
+        s.volume = shapeVolume(d.shape);
+        const double expected = d.count > 0 ? double(d.count) : s.volume / cell * d.particlesPerCell;
+        if (d.count > 0) s.particles = d.count;
+        else if (countExactly && expected <= kSampleUpTo) s.particles = (long long)sampleShape(d.shape, dx, d.particlesPerCell, 0, d.sampling, d.seed).size();
+        else s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
+        s.emissions = emissionsWithin(d, scene.frames);
+        double perParticle = 0.0, density = 0.0;
+        visitMaterialParams(d.params, [&]<class M>(const typename M::Params& p) {
+            perParticle = particleBytes<M>();
+            density = p.density;
+            typename M::Params scaled = p;
+            M::scaleStiffness(scaled, d.lambdaScale, d.muScale);
+            const float w = restWaveSpeed<M>(scaled);
+            if (!(w <= c)) c = w, stiffest = d.name;  // a NaN wave speed wins, and is reported below
+        });
+        s.mass = s.volume * density * d.massScale;
+        vmax = std::max(vmax, d.velocity.norm());
+        const double total = double(s.particles) * double(s.emissions);
+        b.peakParticles += total;
+        const double gridPerParticle = kNodesPerCellOfParticles * kBytesPerNode / d.particlesPerCell;
+        b.memoryBytes += total * (perParticle + kEngineBytesPerParticle + gridPerParticle + kOutputBytesPerParticle) +
+                         double(s.particles) * sizeof(Vec3d);  // the emitter keeps its sampled positions
+        if (largestCoordinate(d.shape) / dx >= kMaxGridCoordinate)
+            b.problems.push_back(where + "/shape: lies " + std::to_string(largestCoordinate(d.shape)) +
+                                 " m from the origin, beyond the grid's coordinate range of +-2^30 cells (" +
+                                 std::to_string(kMaxGridCoordinate * dx) + " m at dx = " + std::to_string(dx) +
+                                 " m); move it nearer the origin or use a larger dx");
+        b.sets.push_back(s);
+    }
+    b.machineBytes = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE));
+    if (b.memoryBytes > b.machineBytes)
+        b.problems.push_back("/sets: the run needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) +
+                             " particles, and this machine has " + gib(b.machineBytes) +
+                             "; use fewer particles (particles_per_cell, count, duration) or a larger dx");
+    // The first step: the target, or the CFL bound at rest (the same rule as the engine's).
+    const double target = st.targetDt();
+    const double speed = double(c) + double(vmax), g = st.gravity.norm(), reach = st.cfl * dx;
+    const double cfl = 2.0 * reach / (speed + std::sqrt(speed * speed + 4.0 * g * reach));
+    b.dt = st.adaptive ? std::min(target, cfl) : target;
+    std::ostringstream cause;
+    if (!st.adaptive || target <= cfl) cause << "the target step 1 / (fps * substeps)";
+    else if (c >= vmax) cause << "the CFL bound from the wave speed " << c << " m/s of set " << stiffest;
+    else cause << "the CFL bound from the initial speed " << vmax << " m/s";
+    b.stepCause = cause.str();
+    b.substepsPerFrame = std::ceil(1.0 / (st.fps * b.dt));
+    if (!(b.substepsPerFrame <= double(st.maxSubstepsPerFrame))) {
+        std::ostringstream p;
+        p << (st.substepsPerFrame > st.maxSubstepsPerFrame ? "/simulation/substeps" : "/simulation")
+          << ": frames would need about " << b.substepsPerFrame << " substeps each (dt = " << b.dt << " s, set by " << b.stepCause
+          << "); the limit is simulation.max_substeps_per_frame = " << st.maxSubstepsPerFrame
+          << "; lower the stiffness or the speed, raise dx, or raise the limit";
+        b.problems.push_back(p.str());
+    }
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i) {
+        const double far = std::visit(
+            []<class S>(const S& s) {
+                if constexpr (std::is_same_v<S, Plane>) return s.point.cwiseAbs().maxCoeff();
+                else return s.centre.cwiseAbs().maxCoeff() + s.radius;
+            },
+            scene.colliders[i].shape);
+        if (far / dx >= kMaxGridCoordinate)
+            b.problems.push_back("/colliders/" + std::to_string(i) + ": lies beyond the grid's coordinate range of +-2^30 cells (" +
+                                 std::to_string(kMaxGridCoordinate * dx) + " m at dx = " + std::to_string(dx) + " m)");
+    }
+    return b;
+}
+
+std::string describeBudget(const SceneBudget& b) {
+    std::ostringstream s;
+    for (const SetBudget& set : b.sets)
+        s << "set " << set.name << ": " << (set.estimated ? "about " : "") << set.particles << " particles, " << set.mass << " kg, "
+          << set.volume << " m^3 per emission; " << set.emissions << " emission" << (set.emissions == 1 ? "" : "s") << "\n";
+    s << "memory: about " << gib(b.memoryBytes) << " at the peak (" << (long long)b.peakParticles << " particles); this machine has "
+      << gib(b.machineBytes) << "\n";
+    s << "substeps per frame: about " << b.substepsPerFrame << " at the start (dt = " << b.dt << " s, set by " << b.stepCause << ")\n";
+    return s.str();
+}
+
+void checkBudget(const SceneDesc& scene, const SceneBudget& budget) {
+    if (budget.problems.empty()) return;
+    std::string msg = scene.file + ": " + budget.problems.front();
+    for (std::size_t i = 1; i < budget.problems.size(); ++i) msg += "\n" + scene.file + ": " + budget.problems[i];
+    throw SceneError(msg);
+}
+
+}  // namespace mpm

@@ -1,0 +1,41 @@
+#pragma once
+// Budgets before work: what a scene will cost, estimated from its description alone, so that a scene that
+// cannot run here (more memory than the machine has, more substeps per frame than allowed, positions
+// outside the grid's integer range) fails validation with the estimate and what to change, instead of
+// stalling or crashing hours later.
+#include <string>
+#include <vector>
+
+#include "io/SceneDesc.h"
+
+namespace mpm {
+
+struct SetBudget {
+    std::string name;
+    long long particles = 0;  ///< per emission
+    bool estimated = false;   ///< from the shape's volume, not counted by sampling
+    long long emissions = 0;  ///< within the scene's frames
+    double mass = 0.0;        ///< per emission [kg]
+    double volume = 0.0;      ///< per emission [m^3]
+};
+
+struct SceneBudget {
+    std::vector<SetBudget> sets;
+    double peakParticles = 0.0;     ///< once every emission is done
+    double memoryBytes = 0.0;       ///< peak, estimated
+    double machineBytes = 0.0;      ///< physical memory of this machine
+    double substepsPerFrame = 0.0;  ///< at the start
+    double dt = 0.0;                ///< the first step
+    std::string stepCause;          ///< what bounds it
+    std::vector<std::string> problems;  ///< each "/json/path: what is wrong; what to change"
+};
+
+/// Estimates the scene's cost. With countExactly, sets of up to a few million particles are sampled to count
+/// them exactly (validate does; a run, which samples them anyway, does not).
+SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly);
+/// The estimate in words, one line per item, for `mpm validate`.
+std::string describeBudget(const SceneBudget& budget);
+/// Throws SceneError ("FILE: /path: problem") when the budget has problems.
+void checkBudget(const SceneDesc& scene, const SceneBudget& budget);
+
+}  // namespace mpm
