@@ -103,11 +103,12 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly) {
         const double gridPerParticle = kNodesPerCellOfParticles * kBytesPerNode / d.particlesPerCell;
         b.memoryBytes += total * (perParticle + kEngineBytesPerParticle + gridPerParticle + kOutputBytesPerParticle) +
                          double(s.particles) * sizeof(Vec3d);  // the emitter keeps its sampled positions
-        if (largestCoordinate(d.shape) / dx >= kMaxGridCoordinate)
-            b.problems.push_back(where + "/shape: lies " + std::to_string(largestCoordinate(d.shape)) +
-                                 " m from the origin, beyond the grid's coordinate range of +-2^30 cells (" +
-                                 std::to_string(kMaxGridCoordinate * dx) + " m at dx = " + std::to_string(dx) +
-                                 " m); move it nearer the origin or use a larger dx");
+        if (largestCoordinate(d.shape) / dx >= kMaxGridCoordinate) {
+            std::ostringstream p;
+            p << where << "/shape: lies " << largestCoordinate(d.shape) << " m from the origin, beyond the grid's coordinate range of "
+              << "+-2^30 cells (" << kMaxGridCoordinate * dx << " m at dx = " << dx << " m); move it nearer the origin or use a larger dx";
+            b.problems.push_back(p.str());
+        }
         b.sets.push_back(s);
     }
     b.machineBytes = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE));
@@ -141,9 +142,12 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly) {
                 else return s.centre.cwiseAbs().maxCoeff() + s.radius;
             },
             scene.colliders[i].shape);
-        if (far / dx >= kMaxGridCoordinate)
-            b.problems.push_back("/colliders/" + std::to_string(i) + ": lies beyond the grid's coordinate range of +-2^30 cells (" +
-                                 std::to_string(kMaxGridCoordinate * dx) + " m at dx = " + std::to_string(dx) + " m)");
+        if (far / dx >= kMaxGridCoordinate) {
+            std::ostringstream p;
+            p << "/colliders/" << i << ": lies " << far << " m from the origin, beyond the grid's coordinate range of +-2^30 cells ("
+              << kMaxGridCoordinate * dx << " m at dx = " << dx << " m)";
+            b.problems.push_back(p.str());
+        }
     }
     return b;
 }

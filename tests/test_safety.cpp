@@ -1,0 +1,397 @@
+// Data safety: the program as a user and a hostile user meet it. kill -9 and signals at random moments then
+// --resume, a full disk, two runs into one directory, a scene whose name starts with another's, corrupt
+// checkpoints, changed scenes, and every hostile-input failure found so far as a regression case with its
+// exit code and message.
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/mount.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "io/Checkpoint.h"
+#include "io/SceneBuilder.h"
+#include "io/SceneReader.h"
+#include "io/VdbWriter.h"
+
+namespace fs = std::filesystem;
+using namespace mpm;
+
+namespace {
+
+std::string tempDir(const std::string& name) {
+    const fs::path p = fs::temp_directory_path() / ("mpm_safety_" + name + "_" + std::to_string(::getpid()));
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p.string();
+}
+
+std::string writeFile(const std::string& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+    return path;
+}
+
+std::string readFile(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// The mpm program started in the background, its output to a log file.
+struct Child {
+    pid_t pid = -1;
+    std::string log;
+    int wait() {
+        int status = 0;
+        ::waitpid(pid, &status, 0);
+        return WIFEXITED(status) ? WEXITSTATUS(status) : WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
+    }
+    std::string output() const { return readFile(log); }
+};
+
+Child start(const std::vector<std::string>& args, const std::string& log) {
+    Child c;
+    c.log = log;
+    c.pid = ::fork();
+    if (c.pid == 0) {
+        const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        ::dup2(fd, 1);
+        ::dup2(fd, 2);
+        std::vector<char*> argv{const_cast<char*>(MPM_BINARY)};
+        for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+        argv.push_back(nullptr);
+        ::execv(MPM_BINARY, argv.data());
+        ::_exit(127);
+    }
+    return c;
+}
+
+struct Result {
+    int code;
+    std::string output;
+};
+
+Result runMpm(const std::vector<std::string>& args, const std::string& dir) {
+    Child c = start(args, dir + "/mpm.log");
+    const int code = c.wait();
+    return {code, c.output()};
+}
+
+/// A small scene that takes about a second: water and an emitted jelly ball against a floor with friction.
+const char* kScene = R"({
+  "simulation": { "frames": 14, "dx": 0.03, "substeps": 4 },
+  "output": { "ply": true, "surface": false },
+  "sets": [ { "name": "w", "material": "water", "shape": { "type": "box", "min": [0, 0, 0], "max": [0.3, 0.3, 0.24] } },
+            { "name": "j", "material": "jelly", "shape": { "type": "sphere", "center": [0.5, 0.4, 0.1], "radius": 0.09 },
+              "velocity": [-1, 0, 0], "start_frame": 2, "duration": 6, "pause": 2 } ],
+  "colliders": [ { "type": "plane", "boundary": "slip", "friction": 0.3 }, { "type": "plane", "normal": [1, 0, 0] } ] })";
+
+/// OpenVDB writes a random archive UUID (36 characters at byte 21) into every file: the rest must match.
+std::string vdbWithoutUuid(const std::string& path) {
+    std::string b = readFile(path);
+    constexpr std::size_t kUuidAt = 21, kUuidLength = 36;
+    if (b.size() > kUuidAt + kUuidLength) b.replace(kUuidAt, kUuidLength, kUuidLength, '-');
+    return b;
+}
+
+/// stats.csv without the wall_seconds column (the last one).
+std::string statsWithoutWallTime(const std::string& path) {
+    std::istringstream in(readFile(path));
+    std::string out;
+    for (std::string line; std::getline(in, line);) out += line.substr(0, line.rfind(',')) + "\n";
+    return out;
+}
+
+/// Frames, PLY files and stats of two output directories are the same (UUID and wall time aside).
+void expectSameOutput(const std::string& a, const std::string& b, const std::string& scene) {
+    int compared = 0;
+    for (const auto& e : fs::directory_iterator(a)) {
+        const std::string name = e.path().filename().string();
+        const std::string other = b + "/" + name;
+        if (name.rfind(scene + "_", 0) != 0 || name.find("checkpoint") != std::string::npos) continue;
+        ASSERT_TRUE(fs::exists(other)) << other;
+        if (e.path().extension() == ".vdb") EXPECT_EQ(vdbWithoutUuid(e.path().string()), vdbWithoutUuid(other)) << name;
+        else EXPECT_EQ(readFile(e.path().string()), readFile(other)) << name;
+        ++compared;
+    }
+    EXPECT_GT(compared, 20);
+    EXPECT_EQ(statsWithoutWallTime(a + "/stats.csv"), statsWithoutWallTime(b + "/stats.csv"));
+}
+
+bool hasCheckpoint(const std::string& dir) {
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec))
+        if (e.path().extension() == ".mpmc") return true;
+    return false;
+}
+
+}  // namespace
+
+TEST(Safety, KilledRunsResumeWithTheBitsOfAnUninterruptedRun) {
+    const std::string dir = tempDir("kill");
+    const std::string scene = writeFile(dir + "/flow.json", kScene);
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/ref", "--quiet"}, dir).code, 0);
+    std::mt19937 rng(2026);
+    std::uniform_int_distribution<int> afterCheckpoint(0, 600);  // ms after the first checkpoint
+    for (const char* threads : {"1", "2"})
+        for (int trial = 0; trial < 2; ++trial) {
+            const std::string out = dir + "/killed_" + threads + "_" + std::to_string(trial);
+            Child c = start({"run", scene, "-o", out, "--quiet", "--threads", threads}, dir + "/child.log");
+            while (!hasCheckpoint(out)) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+            std::this_thread::sleep_for(std::chrono::milliseconds(afterCheckpoint(rng)));
+            ::kill(c.pid, SIGKILL);
+            c.wait();
+            // Resume with the other thread count: bits do not depend on it.
+            const Result r = runMpm({"run", scene, "-o", out, "--resume", "--threads", std::string(threads) == "1" ? "2" : "1"}, dir);
+            ASSERT_EQ(r.code, 0) << r.output;
+            EXPECT_NE(r.output.find("took over the lock"), std::string::npos) << r.output;
+            expectSameOutput(dir + "/ref", out, "flow");
+        }
+}
+
+TEST(Safety, SignalsStopAtASubstepWithACheckpointAndTheRunResumes) {
+    const std::string dir = tempDir("signal");
+    const std::string scene = writeFile(dir + "/flow.json", kScene);
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/ref", "--quiet"}, dir).code, 0);
+    for (const auto& [sig, code] : {std::pair{SIGINT, 130}, std::pair{SIGTERM, 143}}) {
+        const std::string out = dir + "/stopped_" + std::to_string(sig);
+        Child c = start({"run", scene, "-o", out, "--quiet"}, dir + "/child.log");
+        while (!hasCheckpoint(out)) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        std::this_thread::sleep_for(std::chrono::milliseconds(150));
+        ::kill(c.pid, sig);
+        EXPECT_EQ(c.wait(), code);
+        const std::string said = c.output();
+        EXPECT_NE(said.find("resume with: mpm run " + scene + " -o " + out + " --resume"), std::string::npos) << said;
+        for (const auto& e : fs::directory_iterator(out)) EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+        const Result r = runMpm({"run", scene, "-o", out, "--resume", "--quiet"}, dir);
+        ASSERT_EQ(r.code, 0) << r.output;
+        expectSameOutput(dir + "/ref", out, "flow");
+    }
+}
+
+TEST(Safety, CheckpointReadsBackBitForBit) {
+    SceneDesc desc = parseScene(kScene, "flow.json");
+    auto sim = buildSimulation(desc);
+    sim->emitDue();
+    for (int f = 0; f < 3; ++f) sim->advanceFrame();
+    const std::string dir = tempDir("ckpt");
+    CheckpointInfo info;
+    info.format = kCheckpointFormat;
+    info.frame = sim->frame();
+    info.sceneJson = sceneIdentity(desc.resolvedJson);
+    info.sceneHash = sceneHash(info.sceneJson);
+    writeCheckpoint(dir + "/c.mpmc", info, sim->state());
+    const Checkpoint back = readCheckpoint(dir + "/c.mpmc");
+    const SimState& a = sim->state();
+    const SimState& b = back.state;
+    std::string sa, sb;
+    a.forEachScalar([&](const auto& v) { sa.append(reinterpret_cast<const char*>(&v), sizeof(v)); });
+    b.forEachScalar([&](const auto& v) { sb.append(reinterpret_cast<const char*>(&v), sizeof(v)); });
+    EXPECT_EQ(sa, sb);
+    EXPECT_EQ(a.bounds.minStiffnessKey, b.bounds.minStiffnessKey);
+    ASSERT_EQ(a.species.size(), b.species.size());
+    for (std::size_t s = 0; s < a.species.size(); ++s) {
+        ASSERT_EQ(a.species[s].index(), b.species[s].index());
+        std::vector<std::string> arraysA, arraysB;
+        std::visit([&](const auto& sp) { sp.forEachArray([&](const auto& v) { arraysA.emplace_back((const char*)v.data(), v.size() * sizeof(v[0])); }); },
+                   a.species[s]);
+        std::visit([&](const auto& sp) { sp.forEachArray([&](const auto& v) { arraysB.emplace_back((const char*)v.data(), v.size() * sizeof(v[0])); }); },
+                   b.species[s]);
+        EXPECT_EQ(arraysA, arraysB);
+    }
+    // Any flipped byte is found, and a truncated file too.
+    std::string bytes = readFile(dir + "/c.mpmc");
+    bytes[bytes.size() / 2] ^= 0x10;
+    writeFile(dir + "/flipped.mpmc", bytes);
+    EXPECT_THROW(readCheckpoint(dir + "/flipped.mpmc"), CheckpointError);
+    writeFile(dir + "/short.mpmc", readFile(dir + "/c.mpmc").substr(0, bytes.size() - 100));
+    EXPECT_THROW(readCheckpoint(dir + "/short.mpmc"), CheckpointError);
+}
+
+TEST(Safety, ACorruptCheckpointFallsBackToTheOneBeforeAndAChangedSceneIsRefused) {
+    const std::string dir = tempDir("corrupt");
+    const std::string scene = writeFile(dir + "/flow.json", kScene);
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/ref", "--quiet"}, dir).code, 0);
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/out", "--quiet", "--frames", "0:9"}, dir).code, 0);
+    // Checkpoints 8 and 9 are kept; truncate the newest.
+    const std::string newest = dir + "/out/flow_checkpoint_0009.mpmc";
+    fs::resize_file(newest, fs::file_size(newest) / 2);
+    const Result r = runMpm({"run", scene, "-o", dir + "/out", "--resume"}, dir);
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("flow_checkpoint_0009.mpmc: truncated"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("continuing from " + dir + "/out/flow_checkpoint_0008.mpmc"), std::string::npos) << r.output;
+    expectSameOutput(dir + "/ref", dir + "/out", "flow");
+    // The scene changes: resuming is refused, naming what changed, unless forced.
+    std::string changed = kScene;
+    changed.replace(changed.find("\"velocity\": [-1, 0, 0]"), 22, "\"velocity\": [-2, 0, 0]");
+    writeFile(scene, changed);
+    const Result refused = runMpm({"run", scene, "-o", dir + "/out", "--resume"}, dir);
+    EXPECT_EQ(refused.code, 2);
+    EXPECT_NE(refused.output.find("/sets/1/velocity: [-1.0,0.0,0.0] -> [-2.0,0.0,0.0]"), std::string::npos) << refused.output;
+    EXPECT_EQ(runMpm({"run", scene, "-o", dir + "/out", "--resume", "--force", "--quiet"}, dir).code, 0);
+}
+
+TEST(Safety, FramesAToBDeleteNothingElseAndStartFromACheckpoint) {
+    const std::string dir = tempDir("frames");
+    const std::string scene = writeFile(dir + "/flow.json", kScene);
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/ref", "--quiet"}, dir).code, 0);
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/out", "--quiet"}, dir).code, 0);  // checkpoints 13 and 14
+    writeFile(dir + "/out/flow_0014.vdb", "a frame the user edited");
+    const Result r = runMpm({"run", scene, "-o", dir + "/out", "--frames", "14:14"}, dir);
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("continuing from " + dir + "/out/flow_checkpoint_0013.mpmc"), std::string::npos) << r.output;
+    for (int f = 0; f <= 14; ++f) {
+        char name[32];
+        std::snprintf(name, sizeof name, "/flow_%04d.vdb", f);
+        EXPECT_TRUE(fs::exists(dir + "/out" + name)) << name;  // nothing before 14 deleted
+    }
+    EXPECT_EQ(vdbWithoutUuid(dir + "/out/flow_0014.vdb"), vdbWithoutUuid(dir + "/ref/flow_0014.vdb"));
+}
+
+TEST(Safety, OneRunPerDirectoryAndNoOtherScenesFramesRemoved) {
+    const std::string dir = tempDir("lock");
+    const std::string scene = writeFile(dir + "/dam.json", kScene);
+    fs::create_directories(dir + "/out");
+    for (const char* name : {"dam_break_0004.vdb", "dam_break_points_0004.vdb", "dam_break_checkpoint_0004.mpmc"})
+        writeFile(dir + "/out/" + name, "another scene's frame");
+    Child first = start({"run", scene, "-o", dir + "/out", "--quiet"}, dir + "/first.log");
+    while (!fs::exists(dir + "/out/dam_0000.vdb")) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    const Result second = runMpm({"run", scene, "-o", dir + "/out"}, dir);
+    EXPECT_EQ(second.code, 2);
+    EXPECT_NE(second.output.find("in use by another run (pid " + std::to_string(first.pid)), std::string::npos) << second.output;
+    EXPECT_EQ(first.wait(), 0) << first.output();
+    for (const char* name : {"dam_break_0004.vdb", "dam_break_points_0004.vdb", "dam_break_checkpoint_0004.mpmc"})
+        EXPECT_EQ(readFile(dir + "/out/" + name), "another scene's frame") << name;
+    EXPECT_FALSE(fs::exists(dir + "/out/.mpm.lock"));  // released at the end
+    // A lock left by a process that is gone is taken over, with a warning.
+    writeFile(dir + "/out/.mpm.lock", "pid 999999 on host elsewhere since yesterday\n");
+    writeFile(dir + "/out/dam_0003.vdb.tmp999999", "half a frame");
+    const Result again = runMpm({"run", scene, "-o", dir + "/out", "--frames", "0:1"}, dir);
+    EXPECT_EQ(again.code, 0) << again.output;
+    EXPECT_NE(again.output.find("took over the lock of " + dir + "/out from a run that is gone (pid 999999"), std::string::npos)
+        << again.output;
+    EXPECT_NE(again.output.find("removed 1 temporary files"), std::string::npos) << again.output;
+    EXPECT_FALSE(fs::exists(dir + "/out/dam_0003.vdb.tmp999999"));
+}
+
+TEST(Safety, AFullDiskFailsNamingTheFileAndKeepsEveryFrameWhole) {
+    if (::geteuid() != 0) GTEST_SKIP() << "mounting a small tmpfs needs root; run the suite as root to check a full disk";
+    const std::string dir = tempDir("full");
+    const std::string mnt = dir + "/disk";
+    fs::create_directories(mnt);
+    if (::mount("tmpfs", mnt.c_str(), "tmpfs", 0, "size=1m") != 0)
+        GTEST_SKIP() << "cannot mount a tmpfs here (" << std::strerror(errno) << "); the full-disk check needs one";
+    const std::string scene = writeFile(dir + "/flow.json", kScene);
+    const Result r = runMpm({"run", scene, "-o", mnt + "/out", "--quiet"}, dir);
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_NE(r.output.find("No space left on device"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(mnt + "/out/flow_"), std::string::npos) << r.output;  // names the file
+    int frames = 0;
+    for (const auto& e : fs::directory_iterator(mnt + "/out")) {
+        EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+        if (e.path().extension() != ".vdb") continue;
+        EXPECT_NO_THROW(readVdbPoints(e.path().string())) << e.path();  // every file under a final name is whole
+        ++frames;
+    }
+    EXPECT_GT(frames, 0);
+    ::umount(mnt.c_str());
+}
+
+namespace {
+struct BadCase {
+    const char* what;
+    std::string text;
+    int code;
+    std::string message;
+};
+
+std::string nested(int depth) { return std::string(std::size_t(depth), '[') + std::string(std::size_t(depth), ']'); }
+
+std::string waterScene(const std::string& simulation, const std::string& set, const std::string& params = "{}") {
+    return R"({"simulation": {)" + simulation + R"(}, "sets": [{"material": "water", "material_params": )" + params + R"(, )" + set +
+           R"(}]})";
+}
+}  // namespace
+
+TEST(Safety, HostileScenesGetANamedErrorAndExitTwo) {
+    const std::string box = R"("shape": {"type": "box", "min": [0, 0, 0], "max": [0.2, 0.2, 0.2]})";
+    const std::vector<BadCase> cases = {
+        {"deep nesting in a printed value", R"({"simulation": {"frames": )" + nested(100000) + "}}", 2, "nested deeper than 64 levels"},
+        {"deep nesting anywhere", nested(1000000), 2, "nested deeper than 64 levels"},
+        {"a number past double", R"({"simulation": {"dx": 1e400}})", 2, "bad.json: not valid JSON: a number is out of range"},
+        {"truncated", R"({"simulation": {"dx": 0.)", 2, "bad.json: not valid JSON: parse error at line 1, column"},
+        {"invalid UTF-8", "{\"sets\": [{\"name\": \"\xff\xfe\"}]}", 2, "bad.json: not valid JSON"},
+        {"2^63 as an integer", R"({"simulation": {"frames": 9223372036854775808}})", 2,
+         "/simulation/frames: value 9223372036854775808 out of range"},
+        {"a set beyond the grid's range", waterScene(R"("dx": 0.02)", R"("shape": {"type": "sphere", "center": [1e8, 0, 0], "radius": 0.1})"),
+         2, "/sets/0/shape: lies 1e+08 m from the origin, beyond the grid's coordinate range"},
+        {"a particle at 1e30 m/s", waterScene(R"("dx": 0.05)", box + R"(, "velocity": [1e30, 0, 0])"), 2,
+         "substeps each (dt = "},
+        {"density 1e-12", waterScene(R"("dx": 0.05)", box, R"({"density": 1e-12})"), 2, "the limit is simulation.max_substeps_per_frame"},
+        {"bulk modulus 1e12", waterScene(R"("dx": 0.05)", box, R"({"bulk_modulus": 1e12})"), 2, "wave speed"},
+        {"1e6 substeps per frame", waterScene(R"("dx": 0.05, "substeps": 1000000)", box), 2, "/simulation/substeps: frames would need"},
+        {"2e9 particles", waterScene(R"("dx": 0.05)", box + R"(, "count": 2000000000)"), 2, "/sets: the run needs about"},
+    };
+    const std::string dir = tempDir("bad");
+    for (const BadCase& c : cases) {
+        const std::string path = writeFile(dir + "/bad.json", c.text);
+        const Result r = runMpm({"validate", path}, dir);
+        EXPECT_EQ(r.code, c.code) << c.what << ": " << r.output.substr(0, 400);
+        EXPECT_NE(r.output.find(c.message), std::string::npos) << c.what << ": " << r.output.substr(0, 400);
+        EXPECT_NE(r.output.find("bad.json"), std::string::npos) << c.what << " does not name the file";
+    }
+    // E = 1e15 for a solid, as the set's own material.
+    const std::string stiff = R"({"simulation": {"dx": 0.05}, "sets": [{"material": "jelly", "material_params": {"youngs_modulus": 1e15}, )" +
+                              box + "}]}";
+    const Result r = runMpm({"validate", writeFile(dir + "/stiff.json", stiff)}, dir);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("stiff.json: /simulation: frames would need about"), std::string::npos) << r.output;
+    // A directory is not a scene; a run names it and exits 2 too.
+    const Result d = runMpm({"run", dir}, dir);
+    EXPECT_EQ(d.code, 2);
+    EXPECT_NE(d.output.find(dir + ": is a directory, not a scene file"), std::string::npos) << d.output;
+    // 1e6 is an integer.
+    const Result ok = runMpm({"validate", writeFile(dir + "/ok.json", waterScene(R"("frames": 1e2, "dx": 0.05)", box))}, dir);
+    EXPECT_EQ(ok.code, 0) << ok.output;
+    EXPECT_NE(ok.output.find("\"frames\": 100"), std::string::npos) << ok.output;
+}
+
+TEST(Safety, AFrameThatWouldExceedTheSubstepLimitStopsTheRunWithItsCause) {
+    // Valid at the start (about 7 substeps per frame), but a jet speeds up under strong gravity until the
+    // CFL bound asks for more than the limit of 40.
+    const std::string dir = tempDir("watchdog");
+    const std::string scene = writeFile(dir + "/jet.json", R"({
+      "simulation": { "frames": 40, "dx": 0.02, "substeps": 1, "gravity": [0, -400, 0], "max_substeps_per_frame": 40 },
+      "output": { "surface": false, "points": false },
+      "sets": [ { "material": "water", "material_params": { "bulk_modulus": 50 },
+                  "shape": { "type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1] } } ] })");
+    const Result r = runMpm({"run", scene, "-o", dir + "/out", "--quiet"}, dir);
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_NE(r.output.find("substeps (dt = "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("the fastest particle"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("the limit is simulation.max_substeps_per_frame = 40"), std::string::npos) << r.output;
+}
+
+TEST(Safety, SetNamesWithCommasSurviveTheMetadata) {
+    const std::string dir = tempDir("names");
+    const std::string scene = writeFile(dir + "/names.json", R"({
+      "simulation": { "frames": 1, "dx": 0.05, "substeps": 1 },
+      "output": { "surface": false },
+      "sets": [ { "name": "a,b", "material": "water", "shape": { "type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1] } },
+                { "name": "say \"c\"", "material": "jelly", "shape": { "type": "box", "min": [0.2, 0, 0], "max": [0.3, 0.1, 0.1] } } ] })");
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/out", "--quiet"}, dir).code, 0);
+    const PointsReadBack back = readVdbPoints(dir + "/out/names_0001.vdb");
+    EXPECT_EQ(back.setNames, (std::vector<std::string>{"a,b", "say \"c\""}));
+    const auto jelly = std::find(back.set.begin(), back.set.end(), 1);
+    ASSERT_NE(jelly, back.set.end());
+    EXPECT_EQ(back.materialNames.at(std::size_t(back.material[std::size_t(jelly - back.set.begin())])), "jelly");
+}
