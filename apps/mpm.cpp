@@ -123,12 +123,6 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
                      progress.tty ? "\n" : "", sig == SIGTERM ? "SIGTERM" : "SIGINT", job.simulation().frame(), job.simulation().time(),
                      job.lastCheckpoint().c_str(), scenePath.c_str(), job.directory().c_str());
         return kExitSignalBase + (sig ? sig : SIGINT);
-    } catch (const std::bad_alloc&) {
-        const SceneBudget b = estimateBudget(job.scene(), false);
-        std::fprintf(stderr, "\nerror: out of memory at frame %d with %zu particles (the scene needs about %.3g GiB; this machine has %.3g GiB)\n",
-                     job.simulation().frame(), job.simulation().particleCount(), b.memoryBytes / double(1u << 30),
-                     b.machineBytes / double(1u << 30));
-        return kExitRunFailed;
     }
     if (progress.tty) std::fprintf(stderr, "\n");
     if (!quiet)
@@ -138,13 +132,12 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
     return kExitOk;
 }
 
-int validate(const std::string& scenePath, bool strict) {
+int validate(const std::string& scenePath) {
     const SceneDesc scene = loadScene(scenePath);
     const SceneBudget budget = estimateBudget(scene, true);
     std::cout << scene.resolvedJson << "\n";
     std::fprintf(stderr, "%s", describeBudget(budget).c_str());
     checkBudget(scene, budget);
-    (void)strict;
     std::fprintf(stderr, "%s: valid (%zu particle sets)\n", scenePath.c_str(), scene.sets.size());
     return kExitOk;
 }
@@ -156,7 +149,7 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     std::string scenePath, outDir, frames;
     int threads = 0;
-    bool quiet = false, explain = false, resume = false, force = false, strict = false;
+    bool quiet = false, explain = false, resume = false, force = false;
 
     CLI::App* runCmd = app.add_subcommand("run", "simulate a scene and write its frames");
     runCmd->add_option("scene", scenePath, "scene file (JSON)")->required();
@@ -171,7 +164,6 @@ int main(int argc, char** argv) {
     CLI::App* validateCmd = app.add_subcommand("validate", "check a scene, print it with every default filled in and what it will cost");
     validateCmd->add_option("scene", scenePath, "scene file (JSON)");
     validateCmd->add_flag("--explain", explain, "list every scene field, its default and allowed values");
-    validateCmd->add_flag("--strict", strict, "treat warnings as errors");
 
     try {
         app.parse(argc, argv);
@@ -186,7 +178,7 @@ int main(int argc, char** argv) {
                 return kExitOk;
             }
             if (scenePath.empty()) throw SceneError("validate: give a scene file, or --explain");
-            return validate(scenePath, strict);
+            return validate(scenePath);
         }
         RunOptions options;
         options.outDir = outDir;

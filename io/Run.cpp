@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <limits>
 #include <regex>
+#include <sstream>
 
 #include "io/AtomicFile.h"
 #include "io/Checkpoint.h"
@@ -44,7 +45,7 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     if (!lock_->takenOverFrom().empty())
         events_.warning("took over the lock of " + dir_ + " from a run that is gone (" + lock_->takenOverFrom() + ")");
     removeStaleTemporaries();
-    sim_ = buildSimulation(scene_);
+    guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_); });
     layout_ = speciesLayout(scene_);
     identity_ = sceneIdentity(scene_.resolvedJson);
     hash_ = sceneHash(identity_);
@@ -58,6 +59,20 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
 }
 
 SceneRun::~SceneRun() = default;
+
+template <class F>
+void SceneRun::guarded(const std::string& what, F&& f) {
+    try {
+        f();
+    } catch (const std::bad_alloc&) {
+        const SceneBudget b = estimateBudget(scene_, false);
+        std::ostringstream msg;
+        msg.precision(3);
+        msg << "out of memory while " << what << " with " << (sim_ ? sim_->particleCount() : 0) << " particles (the scene needs about "
+            << b.memoryBytes / double(1u << 30) << " GiB at its peak; this machine has " << b.machineBytes / double(1u << 30) << " GiB)";
+        throw LimitExceeded(msg.str());
+    }
+}
 
 void SceneRun::removeStaleTemporaries() {
     int removed = 0;
@@ -153,16 +168,18 @@ void SceneRun::run(const std::atomic<int>* stop) {
     for (int f = start_ + 1; f <= last_; ++f) {
         FrameStats st;
         try {
-            st = sim_->advanceFrame();
+            guarded("simulating frame " + std::to_string(f), [&] { st = sim_->advanceFrame(); });
         } catch (const Interrupted&) {
             saveCheckpoint();
             throw;
         }
-        if (f >= options_.firstFrame) writer_->writeFrame(f, *sim_, st);
-        else writer_->recordStats(st);
+        guarded("writing frame " + std::to_string(f), [&] {
+            if (f >= options_.firstFrame) writer_->writeFrame(f, *sim_, st);
+            else writer_->recordStats(st);
+        });
         // On a stop request a checkpoint is written even when the scene asks for none.
         const bool saved = every > 0 && (f % every == 0 || f == last_);
-        if (saved) saveCheckpoint();
+        if (saved) guarded("writing the checkpoint of frame " + std::to_string(f), [&] { saveCheckpoint(); });
         events_.frameDone(f, last_, st, f >= options_.firstFrame ? writer_->lastWriteSeconds() : 0.0);
         // A stop asked for while the frame was written: the state is at a frame boundary.
         if (stop && stop->load() && f < last_) {

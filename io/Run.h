@@ -55,6 +55,10 @@ public:
     const std::string& lastCheckpoint() const { return lastCheckpoint_; }
 
 private:
+    /// Runs f; an allocation that fails inside becomes an error saying what was being done, with the particle
+    /// count and the scene's memory estimate against the machine's.
+    template <class F>
+    void guarded(const std::string& what, F&& f);
     void chooseStart();
     void saveCheckpoint();
     void removeStaleTemporaries();

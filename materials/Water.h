@@ -84,11 +84,11 @@ struct Water {
         s.J[i] = m.tension ? J : std::fmin(J, 1.0f);
     }
 
-    /// Psi(J) - Psi(1), so that the stored energy is zero at rest.
+    /// Psi(J) - Psi(1) = -k ((J^(1-gamma) - 1) / (1 - gamma) - (J - 1)): zero at rest exactly, and without the
+    /// cancellation of two large terms.
     static double energyDensity(const Params& m, const State& s, std::size_t i) {
         const double k = m.bulkModulus, g = m.gamma, J = s.J[i];
-        auto psi = [&](double j) { return -k * (std::pow(j, 1.0 - g) / (1.0 - g) - j); };
-        return psi(J) - psi(1.0);
+        return -k * ((std::pow(J, 1.0 - g) - 1.0) / (1.0 - g) - (J - 1.0));
     }
 
     static float volumeRatio(const State& s, std::size_t i) { return s.J[i]; }

@@ -126,7 +126,11 @@ TEST_P(Golden, ParticleArraysKeepTheirBits) {
     }
     EXPECT_EQ(all, one) << "the thread count changed the result";
     std::printf("golden %s: 0x%016llxull\n", g.name, static_cast<unsigned long long>(all));
+#ifdef MPM_GOLDEN_BUILD
     EXPECT_EQ(all, g.hash) << "particle arrays of " << g.name << " changed";
+#else
+    std::printf("golden %s: hashes are recorded for GCC Release x86-64-v3 builds; this build checks thread counts only\n", g.name);
+#endif
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Golden, ::testing::ValuesIn(kScenes),

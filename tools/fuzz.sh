@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Fuzzes the scene reader with libFuzzer (clang 14 from Debian) for a bounded time, starting from the
+# checked-in seed corpus. Usage: tools/fuzz.sh [SECONDS] [BUILD_DIR]   (default 60 s, build-fuzz)
+# Exits non-zero on any finding (the crashing input is left in BUILD_DIR as crash-*); prints executions per
+# second, the corpus size and the findings.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-60}
+build=${2:-build-fuzz}
+mkdir -p "$build/corpus"
+CXX=${CXX_FUZZ:-clang++-14}
+flags=(-std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -I. -isystem /usr/include/eigen3)
+srcs=(tests/fuzz/fuzz_scene.cpp io/SceneReader.cpp io/SceneBudget.cpp io/Sampling.cpp core/Species.cpp)
+# Rebuild only when a source changed.
+if [ ! -x "$build/fuzz_scene" ] || [ -n "$(find "${srcs[@]}" io core materials sparse -newer "$build/fuzz_scene" -print -quit)" ]; then
+  "$CXX" "${flags[@]}" "${srcs[@]}" -o "$build/fuzz_scene"
+fi
+cp -n tests/fuzz/corpus/* "$build/corpus/" 2>/dev/null || true
+cd "$build"
+set +e
+./fuzz_scene -max_total_time="$seconds" -max_len=65536 -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 corpus 2> fuzz.log
+rc=$?
+set -e
+execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' fuzz.log | grep -o '[0-9]*$' || echo 0)
+speed=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' fuzz.log | grep -o '[0-9]*$' || echo 0)
+findings=$(find . -maxdepth 1 \( -name 'crash-*' -o -name 'leak-*' -o -name 'timeout-*' -o -name 'oom-*' \) | wc -l)
+echo "fuzz: $execs executions in ${seconds} s ($speed per second), corpus $(ls corpus | wc -l) inputs, $findings findings"
+if [ "$rc" -ne 0 ] || [ "$findings" -ne 0 ]; then
+  tail -n 40 fuzz.log
+  exit 1
+fi
