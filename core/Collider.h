@@ -11,6 +11,8 @@
 
 namespace mpm {
 
+struct ParticleArrays;
+
 enum class Boundary {
     Sticky,    ///< node velocity becomes the collider's
     Slip,      ///< the normal component is removed, in both directions
@@ -37,11 +39,27 @@ public:
     virtual Vec3d velocity(const Vec3d& x, double t) const = 0;
     virtual std::string describe() const = 0;
 
+    /// Whether the collider moves (then it does work on the material, counted by the energy check).
+    virtual bool moving() const { return false; }
     /// A context for one task; the default is none.
     virtual std::unique_ptr<ColliderContext> makeContext() const { return nullptr; }
     /// Applies the boundary condition at time t to every node in `box` of a leaf with phi <= 0 and nonzero mass.
     /// A leaf whose centre lies farther from the surface than its half diagonal is skipped (phi is 1-Lipschitz).
-    virtual void applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context) const = 0;
+    /// Returns the work a moving collider did on the nodes (its impulse times its velocity).
+    virtual double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context) const = 0;
+
+    /// What the particle pass did to one leaf's particles.
+    struct ProjectionResult {
+        double work = 0.0;      ///< work a moving collider did (impulse times its velocity, and lifting against gravity)
+        float maxSpeed = 0.0f;  ///< of the particles it moved
+        std::size_t moved = 0;
+    };
+    /// After advection: particles [begin, end) of a leaf found inside the collider at time t (or, for a wall
+    /// thinner than this step's travel, on the way through it) are moved back to its surface along the normal,
+    /// and their velocity gets the boundary condition. This keeps material out of walls thinner than a cell,
+    /// which conditions on grid nodes alone let it through.
+    virtual ProjectionResult projectParticles(ParticleArrays& particles, uint32_t begin, uint32_t end, const Vec3i& leafOrigin, double dx,
+                                              double t, float dt, const Vec3d& gravity, ColliderContext* context) const = 0;
 
     Boundary boundary() const { return boundary_; }
     float friction() const { return friction_; }

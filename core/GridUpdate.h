@@ -1,17 +1,33 @@
 #pragma once
-// The grid update (thesis 3.20, 3.26, section 5): v = (mv) / m plus dt g on nodes with mass, then the
-// colliders at the step's end time.
+// The collider passes of a substep: the grid update (thesis 3.20, 3.26, section 5): v = (mv) / m plus dt g on
+// nodes with mass, then the colliders at the step's end time; and, after advection, the particle pass that
+// moves particles found inside a collider back to its surface (docs/method.md, section 7).
 #include <memory>
 #include <vector>
 
 #include "core/Collider.h"
+#include "core/Species.h"
 #include "sparse/SparseGrid.h"
 
 namespace mpm {
 
+struct GridUpdateResult {
+    float maxSpeed = 0.0f;  ///< largest node speed
+    double work = 0.0;      ///< work moving colliders did on the nodes
+};
+
 /// Turns momentum into velocity on every written node, adds gravity, applies the colliders at time tEnd.
-/// Returns the largest node speed.
-float updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
-                           float dt, double tEnd);
+GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
+                                      float dt, double tEnd);
+
+struct ProjectionSummary {
+    double work = 0.0;      ///< work moving colliders did on the particles they moved
+    float maxSpeed = 0.0f;  ///< of those particles
+    std::size_t moved = 0;
+};
+
+/// The particle pass: every collider, every particle of every leaf near it, at time tEnd after a step dt.
+ProjectionSummary projectOutOfColliders(const SparseGrid& grid, std::vector<AnySpecies>& species,
+                                        const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd, float dt, const Vec3d& gravity);
 
 }  // namespace mpm

@@ -22,6 +22,7 @@ struct EnergyReference {
     bool set = false;    ///< measured once the first frame starts
     double min = 0.0;    ///< lowest total energy since the last emission
     double scale = 0.0;  ///< largest kinetic + stored energy seen
+    double work = 0.0;   ///< energy moving colliders put in since the start (external work)
 };
 
 struct SimState {
@@ -57,6 +58,7 @@ private:
         f(s.energy.set);
         f(s.energy.min);
         f(s.energy.scale);
+        f(s.energy.work);
     }
 };
 

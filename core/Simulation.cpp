@@ -222,7 +222,7 @@ void Simulation::bin() {
     clock.lap(phases_.binning);
 }
 
-float Simulation::updateGrid(float dt) {
+GridUpdateResult Simulation::updateGrid(float dt) {
     return updateGridVelocities(grid_, colliders_, settings_.gravity.cast<float>(), dt, state_.time + dt);
 }
 
@@ -236,23 +236,27 @@ double Simulation::substep(double dtMax) {
     particlesToGrid(grid_, state_.species, settings_.transfer, float(dt));
     clock.lap(phases_.p2g);
     // Grid update: v = mv/m, gravity, colliders and friction (3.20, 3.26, section 5).
-    const float vmaxGrid = updateGrid(float(dt));
+    GridUpdateResult gridUpdate = updateGrid(float(dt));
     clock.lap(phases_.grid);
     // Thesis pseudocode 3: if a node would move more than maxDisplacement cells, redo with a shorter step.
-    if (settings_.maxDisplacement > 0.0 && vmaxGrid * dt > settings_.maxDisplacement * settings_.dx) {
-        dt = settings_.maxDisplacement * settings_.dx / vmaxGrid;
+    if (settings_.maxDisplacement > 0.0 && gridUpdate.maxSpeed * dt > settings_.maxDisplacement * settings_.dx) {
+        dt = settings_.maxDisplacement * settings_.dx / gridUpdate.maxSpeed;
         particlesToGrid(grid_, state_.species, settings_.transfer, float(dt));
         clock.lap(phases_.p2g);
-        updateGrid(float(dt));
+        gridUpdate = updateGrid(float(dt));
         clock.lap(phases_.grid);
     }
     // G2P: velocity, affine velocity, deformation update with return mapping, advection (3.17-3.19, 3.21).
     const G2PSummary g2p = gridToParticles(grid_, state_.species, settings_.transfer, float(dt));
+    // Particles found inside a collider (walls thinner than a cell included) go back to its surface.
+    const ProjectionSummary held = projectOutOfColliders(grid_, state_.species, colliders_, state_.time + dt, float(dt), settings_.gravity);
     clock.lap(phases_.g2p);
+    // Work moving colliders did is external: the energy check counts it.
+    state_.energy.work += gridUpdate.work + held.work;
     // The bounds the next step starts from, then the blow-up checks: a non-finite value, a particle that
     // outran its stencil, a CFL step that collapsed.
     const double cflBefore = cflTimeStep();
-    state_.bounds = StepBounds{g2p.maxSpeed, g2p.minStiffnessKey};
+    state_.bounds = StepBounds{std::max(g2p.maxSpeed, held.maxSpeed), g2p.minStiffnessKey};
     guard_.checkSubstep(state_, g2p, dt, settings_.dx, cflBefore, cflTimeStep());
     state_.time += dt;
     ++state_.substeps;

@@ -14,6 +14,7 @@
 
 #include "core/Collider.h"
 #include "core/Diagnostics.h"
+#include "core/GridUpdate.h"
 #include "core/SimState.h"
 #include "core/Species.h"
 #include "core/Stability.h"
@@ -123,7 +124,7 @@ private:
     void runFrameSubsteps();
     void checkCoordinates() const;
     void bin();
-    float updateGrid(float dt);
+    GridUpdateResult updateGrid(float dt);
     template <class S>
     void permute(S& species, const std::vector<uint32_t>& destination);
 

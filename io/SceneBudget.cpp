@@ -138,8 +138,8 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly) {
     for (std::size_t i = 0; i < scene.colliders.size(); ++i) {
         const double far = std::visit(
             []<class S>(const S& s) {
-                if constexpr (std::is_same_v<S, Plane>) return s.point.cwiseAbs().maxCoeff();
-                else return s.centre.cwiseAbs().maxCoeff() + s.radius;
+                if constexpr (kFromFile<S>) return 0.0;  // known once its file is read
+                else return s.middle().cwiseAbs().maxCoeff();
             },
             scene.colliders[i].shape);
         if (far / dx >= kMaxGridCoordinate) {

@@ -1,9 +1,72 @@
 #include "io/SceneBuilder.h"
 
+#include <filesystem>
+
 #include "core/Colliders.h"
+#include "core/LevelSetGeometry.h"
+#include "io/LevelSets.h"
 #include "io/Sampling.h"
 
 namespace mpm {
+
+namespace {
+
+/// A file named by a scene, relative to the scene file's folder unless absolute.
+std::string besideScene(const SceneDesc& scene, const std::string& file) {
+    const std::filesystem::path p(file);
+    return p.is_absolute() ? file : (std::filesystem::path(scene.file).parent_path() / p).string();
+}
+
+/// The level set of a file shape, built or read once.
+std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const MeshShape& m) {
+    const double dx = scene.settings.dx, voxel = m.voxelSize > 0.0 ? m.voxelSize : 0.5 * dx;
+    // Outside the band reaches past a leaf's half diagonal of the skip test where it can; inside, the
+    // stencil's reach: deeper than that no node or particle has business.
+    constexpr double kExteriorCells = 2.0, kInteriorCells = 3.0;
+    try {
+        const std::string path = besideScene(scene, m.file);
+        return meshLevelSet(readMesh(path), path, voxel, m.thickness, kExteriorCells * dx + 3.0 * voxel, kInteriorCells * dx);
+    } catch (const LevelSetError& e) {
+        throw SceneError(scene.file + ": " + where + "/file: " + e.what());
+    }
+}
+
+std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v) {
+    try {
+        return vdbLevelSet(besideScene(scene, v.file), v.grid);
+    } catch (const LevelSetError& e) {
+        throw SceneError(scene.file + ": " + where + "/file: " + e.what());
+    }
+}
+
+Motion motionOf(const MotionDesc& m, const Vec3d& centre, double fps) {
+    const Vec3d pivot = m.pivotGiven ? m.pivot : centre;
+    if (m.keyframes.empty()) return Motion::constant(m.velocity, m.angularVelocity, pivot);
+    std::vector<Motion::Key> keys;
+    for (const KeyframeDesc& k : m.keyframes)
+        keys.push_back(Motion::Key{k.frame, k.positionGiven ? k.position : pivot, Eigen::Quaterniond(k.rotation.matrix())});
+    return Motion::keyframes(std::move(keys), pivot, fps);
+}
+
+std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index) {
+    const ColliderDesc& c = scene.colliders[index];
+    const std::string where = "/colliders/" + std::to_string(index);
+    return std::visit(
+        [&]<class S>(const S& shape) -> std::unique_ptr<Collider> {
+            if constexpr (kFromFile<S>) {
+                const auto ls = levelSetOf(scene, where, shape);
+                Vec3d lo, hi;
+                ls->bounds(lo, hi);
+                return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction,
+                                                                         motionOf(c.motion, 0.5 * (lo + hi), scene.settings.fps), c.inside);
+            } else {
+                return analyticCollider(shape, c.boundary, c.friction, motionOf(c.motion, shape.middle(), scene.settings.fps), c.inside);
+            }
+        },
+        c.shape);
+}
+
+}  // namespace
 
 SpeciesLayout speciesLayout(const SceneDesc& scene) {
     SpeciesLayout out;
@@ -42,7 +105,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene) {
         e.pauseFrames = d.pauseFrames;
         sim->addEmitter(std::move(e));
     }
-    for (const ColliderDesc& c : scene.colliders) sim->addCollider(makeCollider(c.shape, c.boundary, c.friction));
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i) sim->addCollider(colliderOf(scene, i));
     return sim;
 }
 

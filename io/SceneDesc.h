@@ -34,10 +34,27 @@ struct ParticleSetDesc {
     unsigned seed = 1;
 };
 
+/// One pose of a keyframed motion (core/Motion.h).
+struct KeyframeDesc {
+    double frame = 0.0;
+    Vec3d position = Vec3d::Zero();  ///< of the pivot
+    bool positionGiven = false;      ///< else: where the pivot is at rest
+    Rotation rotation;
+};
+
+struct MotionDesc {
+    Vec3d velocity = Vec3d::Zero(), angularVelocity = Vec3d::Zero();
+    Vec3d pivot = Vec3d::Zero();
+    bool pivotGiven = false;  ///< else: the collider's centre
+    std::vector<KeyframeDesc> keyframes;
+};
+
 struct ColliderDesc {
     ColliderShape shape;
     Boundary boundary = Boundary::Slip;
     float friction = 0.0f;
+    bool inside = false;  ///< material stays inside it (a tank, a glass, a drum)
+    MotionDesc motion;
 };
 
 struct OutputDesc {

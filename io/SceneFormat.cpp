@@ -29,6 +29,8 @@ public:
     explicit MarkdownKeys(std::ostringstream& out) : out_(out) {
         out_ << "| key | default | allowed | meaning |\n|---|---|---|---|\n";
     }
+    /// The rows of a nested object, in the table already open.
+    MarkdownKeys(std::ostringstream& out, std::string prefix) : out_(out), prefix_(std::move(prefix)) {}
     template <class T>
     void number(const Key& k, T& value) {
         row(k, formatValue(double(value)), range(k));
@@ -55,6 +57,22 @@ public:
         row(k, current, joinNames(allowed));
     }
     void check(bool, std::string_view, const std::string&) {}
+    bool given(std::string_view) { return false; }
+    /// A nested object's keys as rows of this table, named "object/key".
+    template <class F>
+    void object(const Key& k, F&& f) {
+        row(k, "", "object");
+        MarkdownKeys inner(out_, prefix_ + std::string(k.name) + "/");
+        f(inner);
+    }
+    /// A list of objects: one row for it, then its elements' keys, named "list[]/key".
+    template <class T, class F>
+    void list(const Key& k, std::vector<T>&, F&& f) {
+        row(k, "[]", "list of objects");
+        MarkdownKeys inner(out_, prefix_ + std::string(k.name) + "[]/");
+        T item;
+        f(inner, item);
+    }
     /// A row for a key that is an object or a list of its own, described below the table.
     void nested(const char* key, const char* meaning) { out_ << "| " << key << " | | object | " << meaning << " |\n"; }
 
@@ -73,10 +91,11 @@ private:
         // A unit in parentheses is an explanation for error messages; the help text already says it.
         const bool showUnit = !k.unit.empty() && k.unit[0] != '(' && k.help.find(k.unit) == std::string_view::npos;
         const std::string unit = showUnit ? " [" + std::string(k.unit) + "]" : "";
-        out_ << "| " << k.name << " | " << (k.required ? "required" : def) << " | " << allowed << " | " << k.help << unit
+        out_ << "| " << prefix_ << k.name << " | " << (k.required ? "required" : def) << " | " << allowed << " | " << k.help << unit
              << " |\n";
     }
     std::ostringstream& out_;
+    std::string prefix_;
 };
 
 template <class... S>

@@ -2,6 +2,8 @@
 // The scene keys of the simulation settings, the output, a particle set and a collider, in the form of
 // materials/Parameters.h: the reader and `mpm validate --explain` walk these same functions. The keys of a
 // material are in its header (materials/), those of a shape in its file (core/shapes/).
+#include <limits>
+#include <sstream>
 #include <string>
 
 #include "io/SceneDesc.h"
@@ -138,6 +140,35 @@ void setKeys(V& v, ParticleSetDesc& d) {
     v.integer(Key{.name = "seed", .help = "sampling seed (default: set index + 1)", .lo = 0, .hi = 4294967295.0}, d.seed);
 }
 
+/// A collider's motion: constant velocity and spin, or keyframed poses (core/Motion.h).
+template <class V>
+void motionKeys(V& v, MotionDesc& m) {
+    m.pivotGiven = v.given("pivot");
+    v.vec3(Key{.name = "velocity", .help = "constant velocity", .unit = "m/s"}, m.velocity);
+    v.vec3(Key{.name = "angular_velocity", .help = "constant angular velocity about the pivot, right-handed", .unit = "rad/s"},
+           m.angularVelocity);
+    v.vec3(Key{.name = "pivot", .help = "the point it turns about, and whose position keyframes give; default: its centre", .unit = "m"},
+           m.pivot);
+    double previous = -std::numeric_limits<double>::infinity();
+    v.list(Key{.name = "keyframes",
+               .help = "poses by frame: position linear and rotation spherical linear between keys, held before the first and "
+                       "after the last"},
+           m.keyframes, [&](auto& k, KeyframeDesc& key) {
+               key.positionGiven = k.given("position");
+               k.number(Key{.name = "frame", .help = "frame of this pose (fractional frames allowed)", .lo = -1e9, .hi = 1e9, .required = true},
+                        key.frame);
+               k.vec3(Key{.name = "position", .help = "where the pivot is; default: where it is at rest", .unit = "m"}, key.position);
+               k.object(Key{.name = "rotation", .help = "turn from the rest placement about the pivot"},
+                        [&](auto& r) { Rotation::keys(r, key.rotation); });
+               std::ostringstream order;
+               order << "keyframes must come in increasing frame order (" << previous << ", then " << key.frame << ")";
+               k.check(key.frame > previous, "frame", order.str());
+               previous = key.frame;
+           });
+    v.check(m.keyframes.empty() || (m.velocity.isZero() && m.angularVelocity.isZero()), "keyframes",
+            "give a constant motion (velocity, angular_velocity) or keyframes, not both");
+}
+
 /// The keys every collider has besides its shape's.
 template <class V>
 void colliderKeys(V& v, ColliderDesc& c) {
@@ -146,6 +177,8 @@ void colliderKeys(V& v, ColliderDesc& c) {
                  .noun = "boundary"},
              c.boundary, std::span<const Named<Boundary>>(kBoundaries));
     v.number(Key{.name = "friction", .help = "Coulomb coefficient (slip and separate)", .lo = 0.0, .hi = 100.0}, c.friction);
+    v.flag(Key{.name = "inside", .help = "keep material inside it (a tank, a glass, a drum) instead of outside"}, c.inside);
+    v.object(Key{.name = "motion", .help = "how it moves (none: static)"}, [&](auto& m) { motionKeys(m, c.motion); });
 }
 
 }  // namespace mpm

@@ -149,6 +149,23 @@ public:
     void check(bool ok, std::string_view key, const std::string& problem) const {
         if (!ok) fail(key, problem);
     }
+    bool given(std::string_view key) const { return in_.contains(key); }
+    template <class F>
+    void object(const Key& k, F&& f) {
+        JsonKeys c = child(std::string(k.name).c_str());
+        f(c);
+        c.finish();
+    }
+    template <class T, class F>
+    void list(const Key& k, std::vector<T>& items, F&& f) {
+        items.clear();
+        for (JsonKeys& n : array(std::string(k.name).c_str())) {
+            T item;
+            f(n, item);
+            n.finish();
+            items.push_back(std::move(item));
+        }
+    }
 
     // Structure.
     JsonKeys child(const char* key) {

@@ -14,6 +14,9 @@
 //     template <class E> void choice(const Key&, E& value, std::span<const Named<E>> names);  // an enum
 //     void choice(const Key&, std::string& value, const std::vector<std::string>& allowed);
 //     void check(bool ok, std::string_view key, const std::string& problem);  // a rule between keys
+//     bool given(std::string_view key);                                       // whether the scene has it
+//     template <class F> void object(const Key&, F&& f);                     // f(visitor&) inside a nested object
+//     template <class T, class F> void list(const Key&, std::vector<T>&, F&& f);  // f(visitor&, T&) per element
 // };
 // @endcode
 #include <limits>
@@ -62,6 +65,11 @@ struct KeyVisitorArchetype {
     void choice(const Key&, E&, std::span<const Named<E>>) {}
     void choice(const Key&, std::string&, const std::vector<std::string>&) {}
     void check(bool, std::string_view, const std::string&) {}
+    bool given(std::string_view) { return false; }
+    template <class F> void object(const Key&, F&& f) { f(*this); }
+    template <class T, class F> void list(const Key&, std::vector<T>& items, F&& f) {
+        for (T& item : items) f(*this, item);
+    }
 };
 
 /// A type that describes its scene keys.

@@ -25,6 +25,7 @@ struct Plane {
     static Plane through(const Vec3d& p, const Vec3d& n) { return Plane{p, n.normalized()}; }
 
     double signedDistance(const Vec3d& x) const { return normal.dot(x - point); }
+    Vec3d middle() const { return point; }
     Vec3d normalAt(const Vec3d&) const { return normal; }
 };
 

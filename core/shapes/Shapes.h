@@ -1,19 +1,22 @@
 #pragma once
 // The closed lists of shapes: those that fill particle sets (a finite volume, `contains`, `volume`,
-// `bounds`) and those that collide (a signed distance, positive outside, and its normal). Each shape is one
-// file with its formula and scene keys; a new one is that file and one entry in a list here.
+// `bounds`) and those that collide (a signed distance, positive outside, and its normal; or a file that
+// becomes a level set when the scene is built). Each shape is one file with its formula and scene keys; a
+// new one is that file and one entry in a list here.
 #include <string>
 #include <variant>
 #include <vector>
 
 #include "core/shapes/Box.h"
+#include "core/shapes/Cylinder.h"
+#include "core/shapes/FileShapes.h"
 #include "core/shapes/Plane.h"
 #include "core/shapes/Sphere.h"
 
 namespace mpm {
 
-using SetShape = std::variant<Box, Sphere>;
-using ColliderShape = std::variant<Plane, Sphere>;
+using SetShape = std::variant<Box, Sphere, Cylinder>;
+using ColliderShape = std::variant<Plane, Sphere, Box, Cylinder, MeshShape, VdbShape>;
 
 /// The `type` names of a list's shapes, in order.
 template <class... S>
@@ -28,5 +31,9 @@ bool shapeOfType(const std::string& type, std::variant<S...>& out) {
     ((!found && type == S::kType ? (out = S{}, found = true) : false), ...);
     return found;
 }
+
+/// Whether a shape has a formula (analytic) or comes from a file.
+template <class S>
+inline constexpr bool kFromFile = std::is_same_v<S, MeshShape> || std::is_same_v<S, VdbShape>;
 
 }  // namespace mpm

@@ -26,6 +26,7 @@ struct Sphere {
     }
     bool contains(const Vec3d& x) const { return (x - centre).squaredNorm() < radius * radius; }
     double volume() const { return 4.0 / 3.0 * M_PI * radius * radius * radius; }
+    Vec3d middle() const { return centre; }
     void bounds(Vec3d& lo, Vec3d& hi) const {
         lo = centre - Vec3d::Constant(radius);
         hi = centre + Vec3d::Constant(radius);

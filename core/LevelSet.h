@@ -1,0 +1,47 @@
+#pragma once
+// A narrow-band signed distance field held in an OpenVDB level set (from a mesh or a VDB file, io/LevelSets.h),
+// sampled trilinearly. Beyond the band its value is +-background, so distances there are lower bounds.
+// OpenVDB stays inside core/LevelSet.cpp: a Sampler is the per-task accessor a collider keeps.
+#include <memory>
+
+#include "core/Types.h"
+
+namespace mpm {
+
+class LevelSet {
+public:
+    struct Grid;  ///< the OpenVDB grid (core/LevelSetGrid.h)
+    explicit LevelSet(std::shared_ptr<const Grid> grid);
+    ~LevelSet();
+
+    /// Cached tree access for one task; not shared between threads.
+    class Sampler {
+    public:
+        explicit Sampler(const LevelSet& ls);
+        ~Sampler();
+        /// phi at a world point.
+        double phi(const Vec3d& x);
+        /// phi and its gradient (the trilinear interpolant's) at a world point.
+        void phiAndGradient(const Vec3d& x, double& phi, Vec3d& gradient);
+
+    private:
+        struct Impl;
+        std::unique_ptr<Impl> impl_;
+    };
+
+    double voxelSize() const { return voxel_; }
+    double background() const { return background_; }
+    /// World box of the active voxels (the band).
+    void bounds(Vec3d& lo, Vec3d& hi) const {
+        lo = lo_;
+        hi = hi_;
+    }
+    const Grid& grid() const { return *grid_; }
+
+private:
+    std::shared_ptr<const Grid> grid_;
+    double voxel_ = 0.0, background_ = 0.0;
+    Vec3d lo_ = Vec3d::Zero(), hi_ = Vec3d::Zero();
+};
+
+}  // namespace mpm

@@ -1,0 +1,57 @@
+#pragma once
+// Rigid motion of a collider: where its geometry is at time t, and how fast each point of it moves. A pose
+// maps the collider's rest placement (as the scene gives it) to the world, x = R x_rest + T. Two kinds:
+//  - constant: a velocity v and an angular velocity w (rad/s) about a pivot,
+//    x(t) = pivot + v t + Rot(w t) (x_rest - pivot);
+//  - keyframes: at frame f_k the pivot is at position p_k and the body turned by rotation q_k,
+//    x(f) = p(f) + R(f) (x_rest - pivot), p linear and R spherical linear (slerp) between keys, held before
+//    the first key and after the last; frames may be fractional.
+// The velocity of a point x of the collider is v_c(x) = dT/dt + w x (x - T') with w the angular velocity,
+// which is what sticky, slip, separate and friction act relative to.
+#include <vector>
+
+#include "core/Types.h"
+
+namespace mpm {
+
+struct Pose {
+    Mat3d R = Mat3d::Identity();
+    Vec3d T = Vec3d::Zero();
+    Vec3d toWorld(const Vec3d& rest) const { return R * rest + T; }
+    Vec3d toRest(const Vec3d& world) const { return R.transpose() * (world - T); }
+};
+
+/// A rotation as a scene gives it: an axis (any length but zero) and an angle in degrees.
+Mat3d rotationFromAxisDegrees(const Vec3d& axis, double degrees);
+
+class Motion {
+public:
+    struct Key {
+        double frame = 0.0;
+        Vec3d position = Vec3d::Zero();                   ///< of the pivot
+        Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+    };
+
+    /// No motion.
+    Motion() = default;
+    static Motion constant(const Vec3d& velocity, const Vec3d& angularVelocity, const Vec3d& pivot);
+    /// Keys sorted by frame (at least one); fps turns frames into time.
+    static Motion keyframes(std::vector<Key> keys, const Vec3d& pivot, double fps);
+
+    bool moving() const { return kind_ != Kind::None; }
+    Pose at(double t) const;
+    /// Linear velocity of the pose's origin and angular velocity at time t: v_c(x) = linear + w x (x - T).
+    struct Rates {
+        Vec3d linear = Vec3d::Zero(), angular = Vec3d::Zero();
+    };
+    Rates ratesAt(double t) const;
+    Vec3d velocityAt(const Vec3d& x, const Pose& pose, const Rates& r) const { return r.linear + r.angular.cross(x - pose.T); }
+
+private:
+    enum class Kind { None, Constant, Keyframes } kind_ = Kind::None;
+    Vec3d velocity_ = Vec3d::Zero(), angular_ = Vec3d::Zero(), pivot_ = Vec3d::Zero();
+    std::vector<Key> keys_;
+    double fps_ = 24.0;
+};
+
+}  // namespace mpm

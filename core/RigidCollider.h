@@ -1,0 +1,169 @@
+#pragma once
+// A rigid collider: a geometry in its rest placement, a motion (core/Motion.h) that poses it at each
+// substep's time, and whether material stays outside it or inside (a tank, a glass, a drum). The geometry's
+// distance and normal are called inline for every node of a leaf and every particle of a leaf near it, with one
+// virtual call per leaf. A geometry has this shape (AnalyticGeometry below and core/LevelSetGeometry.h):
+// @code
+// struct Geometry {
+//     struct Context { ... };                 // per task: an accessor, a cache; empty for analytic shapes
+//     Context context() const;
+//     double phi(const Vec3d& rest, Context&) const;                             // signed distance, > 0 outside
+//     void phiNormal(const Vec3d& rest, Context&, double& phi, Vec3d& n) const;  // and the outward unit normal
+//     double thinnest() const;                 // thinnest feature it resolves [m]; particles crossing less than
+//                                              // half of it per substep need no swept test (0: never)
+//     static constexpr const char* kName;
+// };
+// @endcode
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "core/Collider.h"
+#include "core/Motion.h"
+
+namespace mpm {
+
+template <class Shape>
+struct AnalyticGeometry {
+    Shape shape;
+    struct Context {};
+    static constexpr const char* kName = Shape::kType;
+    Context context() const { return {}; }
+    double phi(const Vec3d& x, Context&) const { return shape.signedDistance(x); }
+    void phiNormal(const Vec3d& x, Context&, double& phi, Vec3d& n) const {
+        phi = shape.signedDistance(x);
+        n = shape.normalAt(x);
+    }
+    double thinnest() const { return 0.0; }
+};
+
+template <class Geometry>
+class RigidCollider final : public Collider {
+public:
+    RigidCollider(Geometry geometry, Boundary b, float friction, Motion motion = Motion(), bool inside = false)
+        : Collider(b, friction), geometry_(std::move(geometry)), motion_(std::move(motion)), sign_(inside ? -1.0 : 1.0) {}
+
+    const Geometry& geometry() const { return geometry_; }
+    bool moving() const override { return motion_.moving(); }
+
+    double signedDistance(const Vec3d& x, double t) const override {
+        typename Geometry::Context c = geometry_.context();
+        return sign_ * geometry_.phi(motion_.at(t).toRest(x), c);
+    }
+    Vec3d normal(const Vec3d& x, double t) const override {
+        typename Geometry::Context c = geometry_.context();
+        const Pose pose = motion_.at(t);
+        double phi;
+        Vec3d n;
+        geometry_.phiNormal(pose.toRest(x), c, phi, n);
+        return sign_ * (pose.R * n);
+    }
+    Vec3d velocity(const Vec3d& x, double t) const override { return motion_.velocityAt(x, motion_.at(t), motion_.ratesAt(t)); }
+    std::string describe() const override {
+        std::ostringstream s;
+        s << Geometry::kName << (sign_ < 0 ? " (inside)" : "") << " " << boundaryName(boundary()) << " friction " << friction()
+          << (moving() ? " moving" : "");
+        return s.str();
+    }
+
+    std::unique_ptr<ColliderContext> makeContext() const override { return std::make_unique<Context>(geometry_); }
+
+    double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context) const override {
+        if (box.empty()) return 0.0;
+        typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
+        const double halfDiagonal = std::sqrt(3.0) * 0.5 * (kLeafDim - 1) * dx;
+        const Vec3d centre = (leaf.origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
+        const Pose pose = motion_.at(t);
+        const Motion::Rates rates = motion_.ratesAt(t);
+        const bool still = !motion_.moving();
+        if (sign_ * geometry_.phi(still ? centre : pose.toRest(centre), c) > halfDiagonal) return 0.0;
+        double work = 0.0;
+        box.forEach([&](int n) {
+            const float m = leaf.mass[n];
+            if (m == 0.0f) return;
+            const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
+            double phi;
+            Vec3d normal;
+            geometry_.phiNormal(still ? x : pose.toRest(x), c, phi, normal);
+            if (sign_ * phi > 0.0) return;
+            const Vec3d nWorld = still ? Vec3d(sign_ * normal) : Vec3d(sign_ * (pose.R * normal));
+            const Vec3f vc = still ? Vec3f(Vec3f::Zero()) : Vec3f(motion_.velocityAt(x, pose, rates).template cast<float>());
+            Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
+            const Vec3f before = v;
+            v = respond(before, nWorld.template cast<float>(), vc, boundary(), friction());
+            // A moving collider does work on the material: its impulse times its own velocity, J . v_c (what the
+            // node gains less what the inelastic contact dissipates), counted as external.
+            if (!still) work += double(m) * (v - before).template cast<double>().dot(vc.template cast<double>());
+        });
+        return work;
+    }
+
+    ProjectionResult projectParticles(ParticleArrays& P, uint32_t begin, uint32_t end, const Vec3i& leafOrigin, double dx, double t,
+                                      float dt, const Vec3d& gravity, ColliderContext* context) const override {
+        ProjectionResult out;
+        if (begin == end) return out;
+        typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
+        // The particles of a leaf lie within its base nodes' box grown by the stencil and a substep's travel.
+        constexpr double kReachCells = 3.0;
+        const double halfDiagonal = std::sqrt(3.0) * 0.5 * (kLeafDim - 1 + 2.0 * kReachCells) * dx;
+        const Vec3d centre = (leafOrigin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
+        const Pose pose = motion_.at(t);
+        const Motion::Rates rates = motion_.ratesAt(t);
+        const bool still = !motion_.moving();
+        if (sign_ * geometry_.phi(still ? centre : pose.toRest(centre), c) > halfDiagonal) return out;
+        const double thinnest = geometry_.thinnest();
+        for (uint32_t p = begin; p < end; ++p) {
+            Vec3d& x = P.x[p];
+            Vec3f& v = P.v[p];
+            const Vec3d rest = still ? x : pose.toRest(x);
+            double phi = sign_ * geometry_.phi(rest, c);
+            Vec3d at = x;  // where the particle is found inside, if it is
+            // A wall thinner than this substep's travel could be crossed in one step: look along the path.
+            const double travel = double(dt) * double(v.norm());
+            if (phi > 0.0 && thinnest > 0.0 && travel > 0.5 * thinnest) {
+                const int samples = int(std::ceil(travel / (0.5 * thinnest)));
+                const Vec3d from = x - double(dt) * v.cast<double>();
+                for (int s = 1; s < samples && phi > 0.0; ++s) {
+                    at = from + (double(s) / samples) * (x - from);
+                    phi = sign_ * geometry_.phi(still ? at : pose.toRest(at), c);
+                }
+            }
+            if (phi >= 0.0) continue;
+            // Back to the surface along the normal, and the boundary condition on the velocity.
+            double phiAt;
+            Vec3d n;
+            geometry_.phiNormal(still ? at : pose.toRest(at), c, phiAt, n);
+            n = sign_ * (still ? n : Vec3d(pose.R * n));
+            const double len = n.norm();
+            if (!(len > 0.0)) continue;
+            n /= len;
+            const Vec3d moved = at - (sign_ * phiAt) * n;
+            const Vec3f vc = still ? Vec3f(Vec3f::Zero()) : Vec3f(motion_.velocityAt(moved, pose, rates).template cast<float>());
+            const Vec3f before = v;
+            const Vec3f rel = v - vc;
+            if (rel.dot(n.cast<float>()) < 0.0f || boundary() == Boundary::Sticky)
+                v = respond(v, n.cast<float>(), vc, boundary(), friction());
+            if (!still) {
+                // As on the nodes, J . v_c; and moving the particle out against gravity is work too.
+                const double impulse = double(P.mass[p]) * (v - before).template cast<double>().dot(vc.template cast<double>());
+                out.work += impulse - double(P.mass[p]) * gravity.dot(moved - x);
+            }
+            x = moved;
+            out.maxSpeed = std::max(out.maxSpeed, v.norm());
+            ++out.moved;
+        }
+        return out;
+    }
+
+private:
+    struct Context final : ColliderContext {
+        explicit Context(const Geometry& g) : geometry(g.context()) {}
+        typename Geometry::Context geometry;
+    };
+    Geometry geometry_;
+    Motion motion_;
+    double sign_;
+};
+
+}  // namespace mpm

@@ -1,0 +1,69 @@
+#pragma once
+// Solid cylinder of a radius and a height about an axis through its centre. With y = (x - c) . a along the unit
+// axis and r the distance from it, d = (r - radius, |y| - height/2) and
+//   phi = min(max(d_0, d_1), 0) + |max(d, 0)|,
+// the exact signed distance (negative inside). Fills a particle set or collides (a drum with "inside").
+#include <algorithm>
+#include <cmath>
+
+#include "materials/Parameters.h"
+
+namespace mpm {
+
+struct Cylinder {
+    static constexpr const char* kType = "cylinder";
+    Vec3d centre = Vec3d::Zero();
+    Vec3d axis = Vec3d::UnitY();  ///< unit length once read
+    double radius = 0.0, height = 0.0;
+
+    template <class V>
+    static void keys(V& v, Cylinder& s) {
+        v.vec3(Key{.name = "center", .help = "centre", .unit = "m", .required = true}, s.centre);
+        v.vec3(Key{.name = "axis", .help = "axis direction (any length but zero)"}, s.axis);
+        v.number(Key{.name = "radius", .help = "radius", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true}, s.radius);
+        v.number(Key{.name = "height", .help = "length along the axis", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true}, s.height);
+        v.check(s.axis.norm() >= kTiny, "axis", "must not be the zero vector");
+        if (s.axis.norm() >= kTiny) s.axis.normalize();
+    }
+
+    /// Axial and radial coordinates of x, and the radial unit vector (any one on the axis itself).
+    void split(const Vec3d& x, double& y, double& r, Vec3d& radial) const {
+        const Vec3d d = x - centre;
+        y = d.dot(axis);
+        const Vec3d q = d - y * axis;
+        r = q.norm();
+        radial = r > 0.0 ? Vec3d(q / r) : axis.unitOrthogonal();
+    }
+    double signedDistance(const Vec3d& x) const {
+        double y, r;
+        Vec3d radial;
+        split(x, y, r, radial);
+        const double a = r - radius, b = std::fabs(y) - 0.5 * height;
+        return std::min(std::max(a, b), 0.0) + std::hypot(std::max(a, 0.0), std::max(b, 0.0));
+    }
+    Vec3d normalAt(const Vec3d& x) const {
+        double y, r;
+        Vec3d radial;
+        split(x, y, r, radial);
+        const double a = r - radius, b = std::fabs(y) - 0.5 * height;
+        const Vec3d cap = (y >= 0.0 ? 1.0 : -1.0) * axis;
+        if (a > 0.0 && b > 0.0) return (a * radial + b * cap).normalized();  // nearest the rim
+        return a > b ? radial : cap;
+    }
+    bool contains(const Vec3d& x) const {
+        double y, r;
+        Vec3d radial;
+        split(x, y, r, radial);
+        return r < radius && std::fabs(y) < 0.5 * height;
+    }
+    double volume() const { return M_PI * radius * radius * height; }
+    void bounds(Vec3d& lo, Vec3d& hi) const {
+        Vec3d e;
+        for (int i = 0; i < 3; ++i) e[i] = 0.5 * height * std::fabs(axis[i]) + radius * std::sqrt(std::max(0.0, 1.0 - axis[i] * axis[i]));
+        lo = centre - e;
+        hi = centre + e;
+    }
+    Vec3d middle() const { return centre; }
+};
+
+}  // namespace mpm

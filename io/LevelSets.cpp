@@ -1,0 +1,135 @@
+#include "io/LevelSets.h"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <openvdb/tools/GridTransformer.h>
+#include <openvdb/tools/MeshToVolume.h>
+
+#include <assimp/Importer.hpp>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <unordered_map>
+
+#include "core/LevelSetGrid.h"
+
+namespace mpm {
+
+namespace {
+std::string gridClassName(openvdb::GridClass c) { return openvdb::GridBase::gridClassToString(c); }
+}  // namespace
+
+std::size_t TriangleMesh::openEdges() const {
+    std::map<std::pair<int, int>, int> uses;
+    for (const Eigen::Vector3i& t : triangles)
+        for (int e = 0; e < 3; ++e) {
+            const int a = t[e], b = t[(e + 1) % 3];
+            ++uses[{std::min(a, b), std::max(a, b)}];
+        }
+    std::size_t open = 0;
+    for (const auto& [edge, n] : uses) open += n == 1;
+    return open;
+}
+
+TriangleMesh readMesh(const std::string& path) {
+    if (!std::filesystem::is_regular_file(path)) throw LevelSetError(path + ": no such mesh file");
+    Assimp::Importer importer;
+    // Positions only: normals, UVs and materials would keep equal corners apart.
+    importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_NORMALS | aiComponent_TEXCOORDS | aiComponent_COLORS |
+                                                            aiComponent_TANGENTS_AND_BITANGENTS | aiComponent_MATERIALS);
+    const aiScene* scene =
+        importer.ReadFile(path, aiProcess_Triangulate | aiProcess_RemoveComponent | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
+    if (!scene || !scene->mRootNode) throw LevelSetError(path + ": cannot read the mesh: " + importer.GetErrorString());
+    TriangleMesh mesh;
+    std::unordered_map<std::string, int> index;  // welds corners of different sub-meshes at one position
+    auto weld = [&](const aiVector3D& v) {
+        const Vec3d p(v.x, v.y, v.z);
+        const std::string key(reinterpret_cast<const char*>(p.data()), sizeof(double) * 3);
+        const auto [it, added] = index.emplace(key, int(mesh.points.size()));
+        if (added) mesh.points.push_back(p);
+        return it->second;
+    };
+    for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+        const aiMesh* am = scene->mMeshes[m];
+        for (unsigned f = 0; f < am->mNumFaces; ++f) {
+            const aiFace& face = am->mFaces[f];
+            if (face.mNumIndices != 3) continue;  // points and lines of a mesh file carry no surface
+            mesh.triangles.emplace_back(weld(am->mVertices[face.mIndices[0]]), weld(am->mVertices[face.mIndices[1]]),
+                                        weld(am->mVertices[face.mIndices[2]]));
+        }
+    }
+    if (mesh.triangles.empty()) throw LevelSetError(path + ": the file holds no triangles");
+    return mesh;
+}
+
+std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std::string& path, double voxelSize, double thickness,
+                                             double exteriorBand, double interiorBand) {
+    const std::size_t open = mesh.openEdges();
+    if (open > 0 && thickness <= 0.0)
+        throw LevelSetError(path + ": the mesh is open (" + std::to_string(open) +
+                            " edges belong to one triangle only); give it a \"thickness\" to make a shell of it, or close it");
+    const auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    std::vector<openvdb::Vec4I> quads;
+    points.reserve(mesh.points.size());
+    for (const Vec3d& p : mesh.points) points.emplace_back(float(p[0]), float(p[1]), float(p[2]));  // world space
+    for (const Eigen::Vector3i& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
+    const float ex = float(std::max(3.0, exteriorBand / voxelSize)), in = float(std::max(3.0, interiorBand / voxelSize));
+    openvdb::FloatGrid::Ptr grid;
+    if (thickness <= 0.0) {
+        grid = openvdb::tools::meshToSignedDistanceField<openvdb::FloatGrid>(*xform, points, triangles, quads, ex, in);
+    } else {
+        // A shell: the unsigned distance less the half-thickness is negative inside the shell.
+        const float shell = float(thickness / voxelSize);
+        grid = openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(*xform, points, triangles, quads, ex + shell);
+        const float offset = float(thickness);
+        for (auto it = grid->tree().beginValueAll(); it; ++it) it.setValue(*it - offset);
+        grid->tree().root().setBackground(grid->background() - offset, true);
+    }
+    grid->setGridClass(openvdb::GRID_LEVEL_SET);
+    auto holder = std::make_shared<LevelSet::Grid>();
+    holder->grid = grid;
+    return std::make_shared<const LevelSet>(holder);
+}
+
+std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName) {
+    openvdb::initialize();
+    if (!std::filesystem::is_regular_file(path)) throw LevelSetError(path + ": no such VDB file");
+    openvdb::GridBase::Ptr base;
+    try {
+        openvdb::io::File file(path);
+        file.open();
+        if (!file.hasGrid(gridName)) {
+            std::string names;
+            for (auto it = file.beginName(); it != file.endName(); ++it) names += (names.empty() ? "" : ", ") + *it;
+            throw LevelSetError(path + ": no grid \"" + gridName + "\" (grids: " + (names.empty() ? "none" : names) + ")");
+        }
+        base = file.readGrid(gridName);
+        file.close();
+    } catch (const openvdb::Exception& e) {
+        throw LevelSetError(path + ": cannot read: " + e.what());
+    }
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+    if (!grid) throw LevelSetError(path + ": grid \"" + gridName + "\" holds " + base->valueType() + " values; a level set holds floats");
+    if (grid->getGridClass() != openvdb::GRID_LEVEL_SET)
+        throw LevelSetError(path + ": grid \"" + gridName + "\" is a " + gridClassName(grid->getGridClass()) +
+                            ", not a level set; a collider needs a signed distance field (Houdini: VDB from Polygons, distance)");
+    const openvdb::math::Transform& t = grid->transform();
+    const openvdb::Vec3d vs = grid->voxelSize();
+    const bool aligned = t.isLinear() && t.hasUniformScale() &&
+                         t.baseMap()->getAffineMap()->getMat4().getMat3().eq(openvdb::math::Mat3d::identity() * vs[0], 1e-9);
+    if (!aligned) {
+        // Resample onto an axis-aligned grid of the same voxel size, so that sampling needs no rotation.
+        auto out = openvdb::FloatGrid::create(grid->background());
+        out->setTransform(openvdb::math::Transform::createLinearTransform(vs[0]));
+        openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*grid, *out);
+        out->setGridClass(openvdb::GRID_LEVEL_SET);
+        grid = out;
+    }
+    auto holder = std::make_shared<LevelSet::Grid>();
+    holder->grid = grid;
+    return std::make_shared<const LevelSet>(holder);
+}
+
+}  // namespace mpm

@@ -1,0 +1,40 @@
+#pragma once
+// Level sets from the user's files: triangle meshes (any format assimp reads: OBJ, PLY, STL, glTF, FBX, ...)
+// turned into narrow-band signed distance fields with OpenVDB's mesh-to-volume tools, and level sets read
+// from VDB files (Houdini's or Blender's). Errors name the file and what is wrong.
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/LevelSet.h"
+
+namespace mpm {
+
+/// A mesh or VDB file that cannot serve as a level set. what() reads "FILE: problem".
+class LevelSetError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Welded triangles: positions and triangle corner indices.
+struct TriangleMesh {
+    std::vector<Vec3d> points;
+    std::vector<Eigen::Vector3i> triangles;
+    /// Edges used by exactly one triangle (0 for a closed mesh).
+    std::size_t openEdges() const;
+};
+
+/// Reads every mesh of a file into one, welding corners at equal positions.
+TriangleMesh readMesh(const std::string& path);
+
+/// A closed mesh as a solid (thickness 0), or any mesh as a shell of half-thickness `thickness` around its
+/// surface. The band reaches `exteriorBand` outside the surface and `interiorBand` inside [m].
+std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std::string& path, double voxelSize, double thickness,
+                                             double exteriorBand, double interiorBand);
+
+/// The level set grid `grid` of a VDB file. A grid that is not a level set (a fog volume) is an error naming
+/// its class; a grid with a rotated or non-uniform transform is resampled onto an axis-aligned one.
+std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& grid);
+
+}  // namespace mpm
