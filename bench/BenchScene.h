@@ -26,6 +26,9 @@ struct BenchScene {
     int blobs = 1;             ///< 1 block, or 8 blobs at the corners of a cube
     double spreadCells = 0.0;  ///< edge of that cube in cells (blobs only)
     bool spray = false;        ///< particles scattered at random, most alone in their leaf
+    /// The floor: "plane" (analytic), "mesh" (the same floor as a triangle mesh's distance field, added by
+    /// the scene driver, which links the mesh reader) or "none".
+    std::string floor = "plane";
 };
 
 /// Cube edge for spray, in cells: about four leaves' volume per particle, so most particles are alone.
@@ -79,7 +82,7 @@ inline std::unique_ptr<Simulation> makeBenchSimulation(const BenchScene& b) {
     }
     const double vol = h * h * h;
     sim->addParticles(id, x, Vec3f::Zero(), float(vol * densityOf(sim->species()[id])), float(vol), 0);
-    sim->addCollider(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, 0.0f));
+    if (b.floor == "plane") sim->addCollider(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, 0.0f));
     return sim;
 }
 

@@ -27,6 +27,9 @@
 
 #include "BenchScene.h"
 #include "Machine.h"
+#include "core/LevelSetGeometry.h"
+#include "core/RigidCollider.h"
+#include "io/LevelSets.h"
 #include "io/VdbWriter.h"
 
 using namespace mpm;
@@ -63,11 +66,31 @@ double median(std::vector<double> v) {
     return v[v.size() / 2];
 }
 
+/// The benchmark scene, its floor a mesh when asked: a closed box mesh whose top face is the floor plane,
+/// under the whole block, turned into a distance field at half the grid spacing as a scene would.
+std::unique_ptr<Simulation> makeScene(const BenchScene& b) {
+    auto sim = makeBenchSimulation(b);
+    if (b.floor == "mesh") {
+        const double edge = std::cbrt(double(b.particles)) * 0.5 * kDx + 4 * kDx;
+        TriangleMesh box;
+        for (int c = 0; c < 8; ++c)
+            box.points.emplace_back(c & 4 ? edge : -4 * kDx, c & 2 ? 0.0 : -8 * kDx, c & 1 ? edge : -4 * kDx);
+        const int faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+        for (const auto& q : faces) {
+            box.triangles.emplace_back(q[0], q[1], q[2]);
+            box.triangles.emplace_back(q[0], q[2], q[3]);
+        }
+        auto ls = meshLevelSet(box, "bench floor", 0.5 * kDx, 0.0, 2 * kDx + 1.5 * kDx, 3 * kDx, colliderReach(kDx));
+        sim->addCollider(std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, Boundary::Slip, 0.0f));
+    }
+    return sim;
+}
+
 /// One timed run: warm-up substeps (allocation, the first full sort), then `substeps` timed ones.
 std::string measureSubsteps(const Options& o) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(o.threads));
     const double rssBefore = procStatusBytes("VmRSS:");
-    auto sim = makeBenchSimulation(o.scene);
+    auto sim = makeScene(o.scene);
     const double n = double(sim->particleCount());
     resetPeakRss();  // the scene set-up's own buffers are not the simulator's memory
     for (int s = 0; s < o.warmup; ++s) sim->substep(kTargetDt);
@@ -100,7 +123,7 @@ std::string measureSubsteps(const Options& o) {
 constexpr int kPairedBlock = 5;  // timed substeps per block; one more runs first, untimed
 std::vector<std::string> measurePaired(const Options& o) {
     tbb::task_arena single(1), many(o.threads);
-    auto sim = makeBenchSimulation(o.scene);
+    auto sim = makeScene(o.scene);
     const double n = double(sim->particleCount());
     for (int s = 0; s < o.warmup; ++s) many.execute([&] { sim->substep(kTargetDt); });
     std::vector<double> each[2];
@@ -126,7 +149,7 @@ std::vector<std::string> measurePaired(const Options& o) {
 /// Writes one frame's points, then its surface, of a settled block; PSS holds particles written per second.
 std::vector<std::string> measureOutput(const Options& o) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(o.threads));
-    auto sim = makeBenchSimulation(o.scene);
+    auto sim = makeScene(o.scene);
     sim->substep(kTargetDt);
     const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("mpm_bench_output_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
@@ -203,6 +226,11 @@ void suite(const std::string& outDir, bool quick) {
     // Sparsity: eight blobs over an ever larger cube; time and memory must not follow the spread.
     for (double spread : {1e2, 1e3, 1e4, 1e5, 1e6})
         add("sparsity", "water", "quadratic", million, all, "--blobs 8 --spread " + std::to_string(spread));
+    // Colliders: the benchmark block on no floor, the analytic plane and the same floor as a mesh's distance
+    // field, three times each, interleaved: what a collider costs.
+    for (int repeat = 0; repeat < kThroughputRepeats; ++repeat)
+        for (const char* floor : {"none", "plane", "mesh"})
+            add(std::string("floor_") + floor, "water", "quadratic", million, all, std::string("--floor ") + floor);
     // Frame output, apart from simulation.
     std::ostringstream out;
     out << "output --material water --particles " << million << " --threads " << all;
@@ -239,6 +267,8 @@ int main(int argc, char** argv) {
         c->add_option("--blobs", o.scene.blobs, "1 block or 8 blobs")->check(CLI::IsMember({1, 8}));
         c->add_option("--spread", o.scene.spreadCells, "edge of the cube the 8 blobs sit on, in cells");
         c->add_flag("--spray", o.scene.spray, "particles scattered at random, most alone in their leaf");
+        c->add_option("--floor", o.scene.floor, "plane (analytic), mesh (a box mesh's distance field) or none")
+            ->check(CLI::IsMember({"plane", "mesh", "none"}));
     };
     CLI::App* one = app.add_subcommand("one", "one timed run; prints one CSV row");
     addScene(one);

@@ -3,6 +3,7 @@
 // 2013, sec. 8). A collider is a signed distance function of position and time, phi > 0 outside, with its
 // normal and surface velocity. The grid update hands every collider each leaf with a context of its own per
 // task, so that a collider that samples a tree (a level set) can keep an accessor there.
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -12,6 +13,13 @@
 namespace mpm {
 
 struct ParticleArrays;
+
+/// How far from a grid leaf's centre a collider can still matter to the leaf's nodes or particles [cells]:
+/// half the diagonal of the leaf grown by the stencil and a substep's travel (3 cells each side).
+inline double colliderReach(double dx) {
+    constexpr double kMarginCells = 3.0;
+    return 0.5 * std::sqrt(3.0) * (kLeafDim - 1 + 2.0 * kMarginCells) * dx;
+}
 
 enum class Boundary {
     Sticky,    ///< node velocity becomes the collider's
@@ -41,6 +49,9 @@ public:
 
     /// Whether the collider moves (then it does work on the material, counted by the energy check).
     virtual bool moving() const { return false; }
+    /// Called once before each substep's collider passes, serially, with their time: a collider that changes
+    /// over time (a sequence of level sets) loads what that time needs here.
+    virtual void prepare(double /*t*/) {}
     /// A context for one task; the default is none.
     virtual std::unique_ptr<ColliderContext> makeContext() const { return nullptr; }
     /// Applies the boundary condition at time t to every node in `box` of a leaf with phi <= 0 and nonzero mass.

@@ -11,7 +11,9 @@ namespace mpm {
 class LevelSet {
 public:
     struct Grid;  ///< the OpenVDB grid (core/LevelSetGrid.h)
-    explicit LevelSet(std::shared_ptr<const Grid> grid);
+    /// `reach` [m]: how far from the band a point may be and still need the field (a grid leaf's half
+    /// diagonal and a stencil); farther points are told apart by one lookup (Sampler::far).
+    LevelSet(std::shared_ptr<const Grid> grid, double reach);
     ~LevelSet();
 
     /// Cached tree access for one task; not shared between threads.
@@ -23,6 +25,9 @@ public:
         double phi(const Vec3d& x);
         /// phi and its gradient (the trilinear interpolant's) at a world point.
         void phiAndGradient(const Vec3d& x, double& phi, Vec3d& gradient);
+        /// True when x lies farther than `reach` from the band: phi there, and anywhere within reach of x, is
+        /// +-background with the sign phi(x) has.
+        bool far(const Vec3d& x);
 
     private:
         struct Impl;
@@ -39,9 +44,32 @@ public:
     const Grid& grid() const { return *grid_; }
 
 private:
+    struct Near;  ///< a coarse mask of the band, grown by the reach
     std::shared_ptr<const Grid> grid_;
+    std::shared_ptr<const Near> near_;
     double voxel_ = 0.0, background_ = 0.0;
     Vec3d lo_ = Vec3d::Zero(), hi_ = Vec3d::Zero();
+};
+
+/// A vector grid (a VDB `vel` grid), sampled trilinearly; zero outside its active voxels.
+class VectorField {
+public:
+    struct Grid;  ///< the OpenVDB grid (core/LevelSetGrid.h)
+    explicit VectorField(std::shared_ptr<const Grid> grid) : grid_(std::move(grid)) {}
+    class Sampler {
+    public:
+        explicit Sampler(const VectorField& f);
+        ~Sampler();
+        Vec3d value(const Vec3d& x);
+
+    private:
+        struct Impl;
+        std::unique_ptr<Impl> impl_;
+    };
+    const Grid& grid() const { return *grid_; }
+
+private:
+    std::shared_ptr<const Grid> grid_;
 };
 
 }  // namespace mpm

@@ -10,4 +10,8 @@ struct LevelSet::Grid {
     openvdb::FloatGrid::ConstPtr grid;
 };
 
+struct VectorField::Grid {
+    openvdb::Vec3SGrid::ConstPtr grid;
+};
+
 }  // namespace mpm

@@ -7,10 +7,14 @@
 // struct Geometry {
 //     struct Context { ... };                 // per task: an accessor, a cache; empty for analytic shapes
 //     Context context() const;
-//     double phi(const Vec3d& rest, Context&) const;                             // signed distance, > 0 outside
-//     void phiNormal(const Vec3d& rest, Context&, double& phi, Vec3d& n) const;  // and the outward unit normal
+//     void prepare(double t);                  // before a substep's passes, serially (load what time t needs)
+//     double phi(const Vec3d& rest, double t, Context&) const;        // signed distance, > 0 outside
+//     void phiNormal(const Vec3d& rest, double t, Context&, double& phi, Vec3d& n) const;  // and the unit normal
+//     Vec3d surfaceVelocity(const Vec3d& rest, double t, Context&) const;  // of a deforming surface, rest frame
+//     bool far(const Vec3d& rest, Context&) const;  // sure to be farther than colliderReach from the surface
 //     double thinnest() const;                 // thinnest feature it resolves [m]; particles crossing less than
 //                                              // half of it per substep need no swept test (0: never)
+//     static constexpr bool kDeforming;        // whether surfaceVelocity can be nonzero
 //     static constexpr const char* kName;
 // };
 // @endcode
@@ -29,12 +33,16 @@ struct AnalyticGeometry {
     Shape shape;
     struct Context {};
     static constexpr const char* kName = Shape::kType;
+    static constexpr bool kDeforming = false;
     Context context() const { return {}; }
-    double phi(const Vec3d& x, Context&) const { return shape.signedDistance(x); }
-    void phiNormal(const Vec3d& x, Context&, double& phi, Vec3d& n) const {
+    void prepare(double) {}
+    double phi(const Vec3d& x, double, Context&) const { return shape.signedDistance(x); }
+    void phiNormal(const Vec3d& x, double, Context&, double& phi, Vec3d& n) const {
         phi = shape.signedDistance(x);
         n = shape.normalAt(x);
     }
+    Vec3d surfaceVelocity(const Vec3d&, double, Context&) const { return Vec3d::Zero(); }
+    bool far(const Vec3d&, Context&) const { return false; }  // the distance itself decides
     double thinnest() const { return 0.0; }
 };
 
@@ -45,21 +53,26 @@ public:
         : Collider(b, friction), geometry_(std::move(geometry)), motion_(std::move(motion)), sign_(inside ? -1.0 : 1.0) {}
 
     const Geometry& geometry() const { return geometry_; }
-    bool moving() const override { return motion_.moving(); }
+    bool moving() const override { return motion_.moving() || Geometry::kDeforming; }
+    void prepare(double t) override { geometry_.prepare(t); }
 
     double signedDistance(const Vec3d& x, double t) const override {
         typename Geometry::Context c = geometry_.context();
-        return sign_ * geometry_.phi(motion_.at(t).toRest(x), c);
+        return sign_ * geometry_.phi(motion_.at(t).toRest(x), t, c);
     }
     Vec3d normal(const Vec3d& x, double t) const override {
         typename Geometry::Context c = geometry_.context();
         const Pose pose = motion_.at(t);
         double phi;
         Vec3d n;
-        geometry_.phiNormal(pose.toRest(x), c, phi, n);
+        geometry_.phiNormal(pose.toRest(x), t, c, phi, n);
         return sign_ * (pose.R * n);
     }
-    Vec3d velocity(const Vec3d& x, double t) const override { return motion_.velocityAt(x, motion_.at(t), motion_.ratesAt(t)); }
+    Vec3d velocity(const Vec3d& x, double t) const override {
+        typename Geometry::Context c = geometry_.context();
+        const Pose pose = motion_.at(t);
+        return motion_.velocityAt(x, pose, motion_.ratesAt(t)) + pose.R * geometry_.surfaceVelocity(pose.toRest(x), t, c);
+    }
     std::string describe() const override {
         std::ostringstream s;
         s << Geometry::kName << (sign_ < 0 ? " (inside)" : "") << " " << boundaryName(boundary()) << " friction " << friction()
@@ -76,8 +89,8 @@ public:
         const Vec3d centre = (leaf.origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
         const Pose pose = motion_.at(t);
         const Motion::Rates rates = motion_.ratesAt(t);
-        const bool still = !motion_.moving();
-        if (sign_ * geometry_.phi(still ? centre : pose.toRest(centre), c) > halfDiagonal) return 0.0;
+        const bool still = !moving();
+        if (skip(still ? centre : pose.toRest(centre), t, c, halfDiagonal)) return 0.0;
         double work = 0.0;
         box.forEach([&](int n) {
             const float m = leaf.mass[n];
@@ -85,10 +98,11 @@ public:
             const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
             double phi;
             Vec3d normal;
-            geometry_.phiNormal(still ? x : pose.toRest(x), c, phi, normal);
+            const Vec3d rest = still ? x : pose.toRest(x);
+            geometry_.phiNormal(rest, t, c, phi, normal);
             if (sign_ * phi > 0.0) return;
             const Vec3d nWorld = still ? Vec3d(sign_ * normal) : Vec3d(sign_ * (pose.R * normal));
-            const Vec3f vc = still ? Vec3f(Vec3f::Zero()) : Vec3f(motion_.velocityAt(x, pose, rates).template cast<float>());
+            const Vec3f vc = still ? Vec3f(Vec3f::Zero()) : Vec3f(velocityAt(x, rest, pose, rates, t, c).template cast<float>());
             Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
             const Vec3f before = v;
             v = respond(before, nWorld.template cast<float>(), vc, boundary(), friction());
@@ -105,19 +119,18 @@ public:
         if (begin == end) return out;
         typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
         // The particles of a leaf lie within its base nodes' box grown by the stencil and a substep's travel.
-        constexpr double kReachCells = 3.0;
-        const double halfDiagonal = std::sqrt(3.0) * 0.5 * (kLeafDim - 1 + 2.0 * kReachCells) * dx;
+        const double halfDiagonal = colliderReach(dx);
         const Vec3d centre = (leafOrigin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
         const Pose pose = motion_.at(t);
         const Motion::Rates rates = motion_.ratesAt(t);
-        const bool still = !motion_.moving();
-        if (sign_ * geometry_.phi(still ? centre : pose.toRest(centre), c) > halfDiagonal) return out;
+        const bool still = !moving();
+        if (skip(still ? centre : pose.toRest(centre), t, c, halfDiagonal)) return out;
         const double thinnest = geometry_.thinnest();
         for (uint32_t p = begin; p < end; ++p) {
             Vec3d& x = P.x[p];
             Vec3f& v = P.v[p];
             const Vec3d rest = still ? x : pose.toRest(x);
-            double phi = sign_ * geometry_.phi(rest, c);
+            double phi = sign_ * geometry_.phi(rest, t, c);
             Vec3d at = x;  // where the particle is found inside, if it is
             // A wall thinner than this substep's travel could be crossed in one step: look along the path.
             const double travel = double(dt) * double(v.norm());
@@ -126,20 +139,21 @@ public:
                 const Vec3d from = x - double(dt) * v.cast<double>();
                 for (int s = 1; s < samples && phi > 0.0; ++s) {
                     at = from + (double(s) / samples) * (x - from);
-                    phi = sign_ * geometry_.phi(still ? at : pose.toRest(at), c);
+                    phi = sign_ * geometry_.phi(still ? at : pose.toRest(at), t, c);
                 }
             }
             if (phi >= 0.0) continue;
             // Back to the surface along the normal, and the boundary condition on the velocity.
             double phiAt;
             Vec3d n;
-            geometry_.phiNormal(still ? at : pose.toRest(at), c, phiAt, n);
+            geometry_.phiNormal(still ? at : pose.toRest(at), t, c, phiAt, n);
             n = sign_ * (still ? n : Vec3d(pose.R * n));
             const double len = n.norm();
             if (!(len > 0.0)) continue;
             n /= len;
             const Vec3d moved = at - (sign_ * phiAt) * n;
-            const Vec3f vc = still ? Vec3f(Vec3f::Zero()) : Vec3f(motion_.velocityAt(moved, pose, rates).template cast<float>());
+            const Vec3f vc =
+                still ? Vec3f(Vec3f::Zero()) : Vec3f(velocityAt(moved, pose.toRest(moved), pose, rates, t, c).template cast<float>());
             const Vec3f before = v;
             const Vec3f rel = v - vc;
             if (rel.dot(n.cast<float>()) < 0.0f || boundary() == Boundary::Sticky)
@@ -157,6 +171,19 @@ public:
     }
 
 private:
+    /// Whether nothing within `reach` of a leaf centre can touch the collider: phi is 1-Lipschitz, so a
+    /// distance larger than the reach says so; and beyond a level set's band, its coarse mask does.
+    bool skip(const Vec3d& centreRest, double t, typename Geometry::Context& c, double reach) const {
+        const double phi = sign_ * geometry_.phi(centreRest, t, c);
+        return phi > reach || (phi > 0.0 && geometry_.far(centreRest, c));
+    }
+    /// The collider's velocity at a world point: its rigid motion's plus its surface's own (a deforming one).
+    Vec3d velocityAt(const Vec3d& x, const Vec3d& rest, const Pose& pose, const Motion::Rates& rates, double t,
+                     typename Geometry::Context& c) const {
+        Vec3d v = motion_.velocityAt(x, pose, rates);
+        if constexpr (Geometry::kDeforming) v += pose.R * geometry_.surfaceVelocity(rest, t, c);
+        return v;
+    }
     struct Context final : ColliderContext {
         explicit Context(const Geometry& g) : geometry(g.context()) {}
         typename Geometry::Context geometry;

@@ -223,6 +223,7 @@ void Simulation::bin() {
 }
 
 GridUpdateResult Simulation::updateGrid(float dt) {
+    for (const auto& c : colliders_) c->prepare(state_.time + dt);
     return updateGridVelocities(grid_, colliders_, settings_.gravity.cast<float>(), dt, state_.time + dt);
 }
 

@@ -5,7 +5,9 @@
 #include <openvdb/tools/GridTransformer.h>
 #include <openvdb/tools/MeshToVolume.h>
 
+#include <algorithm>
 #include <assimp/Importer.hpp>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -63,7 +65,7 @@ TriangleMesh readMesh(const std::string& path) {
 }
 
 std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std::string& path, double voxelSize, double thickness,
-                                             double exteriorBand, double interiorBand) {
+                                             double exteriorBand, double interiorBand, double reach) {
     const std::size_t open = mesh.openEdges();
     if (open > 0 && thickness <= 0.0)
         throw LevelSetError(path + ": the mesh is open (" + std::to_string(open) +
@@ -90,10 +92,10 @@ std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std
     grid->setGridClass(openvdb::GRID_LEVEL_SET);
     auto holder = std::make_shared<LevelSet::Grid>();
     holder->grid = grid;
-    return std::make_shared<const LevelSet>(holder);
+    return std::make_shared<const LevelSet>(holder, reach);
 }
 
-std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName) {
+std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName, double reach) {
     openvdb::initialize();
     if (!std::filesystem::is_regular_file(path)) throw LevelSetError(path + ": no such VDB file");
     openvdb::GridBase::Ptr base;
@@ -129,7 +131,73 @@ std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::
     }
     auto holder = std::make_shared<LevelSet::Grid>();
     holder->grid = grid;
-    return std::make_shared<const LevelSet>(holder);
+    return std::make_shared<const LevelSet>(holder, reach);
+}
+
+std::shared_ptr<const VectorField> vdbVectorField(const std::string& path, const std::string& gridName) {
+    openvdb::initialize();
+    openvdb::GridBase::Ptr base;
+    try {
+        openvdb::io::File file(path);
+        file.open();
+        if (!file.hasGrid(gridName)) throw LevelSetError(path + ": no grid \"" + gridName + "\"");
+        base = file.readGrid(gridName);
+        file.close();
+    } catch (const openvdb::Exception& e) {
+        throw LevelSetError(path + ": cannot read: " + e.what());
+    }
+    auto grid = openvdb::gridPtrCast<openvdb::Vec3SGrid>(base);
+    if (!grid) throw LevelSetError(path + ": grid \"" + gridName + "\" holds " + base->valueType() + " values; a velocity grid holds vec3s");
+    auto holder = std::make_shared<VectorField::Grid>();
+    holder->grid = grid;
+    return std::make_shared<const VectorField>(holder);
+}
+
+namespace {
+/// The pattern split around its $F or $Fn, and n (0: no padding).
+struct Pattern {
+    std::string before, after;
+    int digits = 0;
+};
+Pattern splitPattern(const std::string& pattern) {
+    const std::size_t at = pattern.find("$F");
+    if (at == std::string::npos) throw LevelSetError(pattern + ": not a sequence (no $F)");
+    Pattern p;
+    std::size_t end = at + 2;
+    while (end < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[end]))) ++end;
+    p.digits = end > at + 2 ? std::stoi(pattern.substr(at + 2, end - at - 2)) : 0;
+    p.before = pattern.substr(0, at);
+    p.after = pattern.substr(end);
+    return p;
+}
+}  // namespace
+
+std::string sequenceFile(const std::string& pattern, int frame) {
+    const Pattern p = splitPattern(pattern);
+    std::string n = std::to_string(frame);
+    if (int(n.size()) < p.digits) n = std::string(std::size_t(p.digits) - n.size(), '0') + n;
+    return p.before + n + p.after;
+}
+
+std::vector<int> sequenceFrames(const std::string& pattern) {
+    const Pattern p = splitPattern(pattern);
+    const std::filesystem::path dir = std::filesystem::path(p.before).parent_path();
+    const std::string prefix = std::filesystem::path(p.before).filename().string();
+    std::vector<int> frames;
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(dir.empty() ? "." : dir, ec)) {
+        const std::string name = e.path().filename().string();
+        if (name.size() <= prefix.size() + p.after.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+            name.compare(name.size() - p.after.size(), p.after.size(), p.after) != 0)
+            continue;
+        const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - p.after.size());
+        if (digits.empty() || !std::all_of(digits.begin(), digits.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); }))
+            continue;
+        frames.push_back(std::stoi(digits));
+    }
+    std::sort(frames.begin(), frames.end());
+    if (frames.empty()) throw LevelSetError(pattern + ": no file of the sequence exists");
+    return frames;
 }
 
 }  // namespace mpm

@@ -29,12 +29,20 @@ struct TriangleMesh {
 TriangleMesh readMesh(const std::string& path);
 
 /// A closed mesh as a solid (thickness 0), or any mesh as a shell of half-thickness `thickness` around its
-/// surface. The band reaches `exteriorBand` outside the surface and `interiorBand` inside [m].
+/// surface. The band reaches `exteriorBand` outside the surface and `interiorBand` inside [m]; `reach` is the
+/// LevelSet's (how far from the band a point still needs the field).
 std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std::string& path, double voxelSize, double thickness,
-                                             double exteriorBand, double interiorBand);
+                                             double exteriorBand, double interiorBand, double reach);
 
 /// The level set grid `grid` of a VDB file. A grid that is not a level set (a fog volume) is an error naming
 /// its class; a grid with a rotated or non-uniform transform is resampled onto an axis-aligned one.
-std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& grid);
+std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& grid, double reach);
+
+/// The vector grid `grid` of a VDB file (a velocity field).
+std::shared_ptr<const VectorField> vdbVectorField(const std::string& path, const std::string& grid);
+
+/// The frames of a sequence pattern ("wall_$F4.vdb"): the file of frame f, and the frames that exist.
+std::string sequenceFile(const std::string& pattern, int frame);
+std::vector<int> sequenceFrames(const std::string& pattern);
 
 }  // namespace mpm

@@ -4,6 +4,7 @@
 
 #include "core/Colliders.h"
 #include "core/LevelSetGeometry.h"
+#include "core/LevelSetSequence.h"
 #include "io/LevelSets.h"
 #include "io/Sampling.h"
 
@@ -25,7 +26,8 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
     constexpr double kExteriorCells = 2.0, kInteriorCells = 3.0;
     try {
         const std::string path = besideScene(scene, m.file);
-        return meshLevelSet(readMesh(path), path, voxel, m.thickness, kExteriorCells * dx + 3.0 * voxel, kInteriorCells * dx);
+        return meshLevelSet(readMesh(path), path, voxel, m.thickness, kExteriorCells * dx + 3.0 * voxel, kInteriorCells * dx,
+                            colliderReach(dx));
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
     }
@@ -33,7 +35,7 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
 
 std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v) {
     try {
-        return vdbLevelSet(besideScene(scene, v.file), v.grid);
+        return vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx));
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
     }
@@ -48,9 +50,35 @@ Motion motionOf(const MotionDesc& m, const Vec3d& centre, double fps) {
     return Motion::keyframes(std::move(keys), pivot, fps);
 }
 
+/// A VDB sequence: a deforming collider whose frames are read as the run reaches them.
+std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::string& where, const ColliderDesc& c, const VdbShape& v) {
+    if (c.motion.velocity.any() || c.motion.angularVelocity.any() || !c.motion.keyframes.empty())
+        throw SceneError(scene.file + ": " + where + "/motion: a sequence moves by its frames; it takes no motion");
+    const std::string pattern = besideScene(scene, v.file);
+    try {
+        const std::vector<int> frames = sequenceFrames(pattern);
+        const double reach = colliderReach(scene.settings.dx);
+        const auto first = vdbLevelSet(sequenceFile(pattern, frames.front()), v.grid, reach);  // checked now, not hours later
+        auto load = [pattern, grid = v.grid, vel = v.velocityGrid, reach](int f) {
+            LevelSetFrame frame;
+            const std::string file = sequenceFile(pattern, f);
+            frame.phi = vdbLevelSet(file, grid, reach);
+            if (!vel.empty()) frame.velocity = vdbVectorField(file, vel);
+            return frame;
+        };
+        return std::make_unique<RigidCollider<LevelSetSequenceGeometry>>(
+            LevelSetSequenceGeometry(load, frames.front(), frames.back(), scene.settings.fps, first->voxelSize()), c.boundary, c.friction,
+            Motion(), c.inside);
+    } catch (const LevelSetError& e) {
+        throw SceneError(scene.file + ": " + where + "/file: " + e.what());
+    }
+}
+
 std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index) {
     const ColliderDesc& c = scene.colliders[index];
     const std::string where = "/colliders/" + std::to_string(index);
+    if (const auto* v = std::get_if<VdbShape>(&c.shape); v && v->file.find("$F") != std::string::npos)
+        return sequenceCollider(scene, where, c, *v);
     return std::visit(
         [&]<class S>(const S& shape) -> std::unique_ptr<Collider> {
             if constexpr (kFromFile<S>) {

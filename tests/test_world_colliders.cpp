@@ -128,7 +128,7 @@ TEST(MeshCollider, AnIcosphereDistanceFieldMatchesTheSphere) {
     const TriangleMesh mesh = readMesh(obj);
     ASSERT_GE(mesh.triangles.size(), 2000u);
     EXPECT_EQ(mesh.openEdges(), 0u);
-    const auto ls = meshLevelSet(mesh, obj, voxel, 0.0, 3 * voxel, 3 * voxel);
+    const auto ls = meshLevelSet(mesh, obj, voxel, 0.0, 3 * voxel, 3 * voxel, 0.1);
     LevelSet::Sampler s(*ls);
     double worst = 0.0;
     int samples = 0;
@@ -336,4 +336,40 @@ TEST(MovingCollider, AStirredTankDoesNotTripTheEnergyCheck) {
     EXPECT_NO_THROW(for (int f = 0; f < 24; ++f) st = sim->advanceFrame());
     EXPECT_GT(st.kineticEnergy, 10.0 * (start.kineticEnergy + 1e-6));  // the paddle did stir it
     EXPECT_GT(sim->state().energy.work, 0.0);
+}
+
+TEST(VdbCollider, ARisingSequenceOfLevelSetsLiftsTheBodyOnIt) {
+    // A slab whose top rises 1 cm a frame (0.24 m/s), written as one VDB per frame, lifts a sticky jelly block.
+    const std::string dir = tempDir("sequence");
+    const double voxel = 0.02;
+    constexpr int kBand = 4;  // voxels each side of the slab's top face
+    for (int f = 0; f <= 24; ++f) {
+        const double top = 0.01 * f;
+        auto slab = openvdb::FloatGrid::create(float(kBand * voxel));
+        slab->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+        slab->setGridClass(openvdb::GRID_LEVEL_SET);
+        auto acc = slab->getAccessor();
+        const int j0 = int(std::floor(top / voxel));
+        for (int i = -30; i <= 30; ++i)
+            for (int k = -30; k <= 30; ++k)
+                for (int j = j0 - kBand; j <= j0 + kBand; ++j) acc.setValue(openvdb::Coord(i, j, k), float(j * voxel - top));
+        slab->setName("surface");
+        char name[64];
+        std::snprintf(name, sizeof name, "/floor_%04d.vdb", f);
+        openvdb::GridPtrVec grids{slab};
+        openvdb::io::File(dir + name).write(grids);
+    }
+    const std::string text = R"({"simulation": {"dx": 0.04, "substeps": 5},
+        "sets": [{"material": "jelly", "material_params": {"youngs_modulus": 2e5}, "sampling": "lattice",
+                  "shape": {"type": "box", "min": [-0.1, 0.0, -0.1], "max": [0.1, 0.16, 0.1]}}],
+        "colliders": [{"type": "vdb", "file": "floor_$F4.vdb", "boundary": "sticky"}]})";
+    auto sim = build(text, dir + "/rise.json");
+    sim->emitDue();
+    const double y0 = meanPosition(*sim)[1];
+    for (int f = 0; f < 12; ++f) sim->advanceFrame();
+    EXPECT_NEAR(meanPosition(*sim)[1] - y0, 0.12, 0.015);  // carried up half a second at 0.24 m/s
+    EXPECT_GT(sim->state().energy.work, 0.0);              // the deforming collider's work is external
+    // Past the last frame the surface is held.
+    for (int f = 12; f < 36; ++f) sim->advanceFrame();
+    EXPECT_NEAR(meanPosition(*sim)[1] - y0, 0.24, 0.02);
 }

@@ -204,6 +204,24 @@ def main(out):
         plt.close(fig)
         md += ["", "![sparsity](sparsity.png)", ""]
 
+    # --- Colliders ---------------------------------------------------------------------------------
+    floors = {}
+    for kind in ("none", "plane", "mesh"):
+        r = [num(x, "seconds") / num(x, "substeps") for x in rows if x["experiment"] == "floor_" + kind]
+        if r:
+            floors[kind] = sorted(r)[len(r) // 2]
+    collider_share = float("nan")
+    if len(floors) == 3:
+        md += ["## Colliders", "",
+               "The benchmark block (water) on no floor, on the analytic plane, and on the same floor as a box mesh's",
+               "distance field (voxel dx/2), interleaved, median of three; a collider's cost is the time it adds.", "",
+               "| floor | s per substep | added | share of the substep |", "|---|---|---|---|"]
+        for kind in ("none", "plane", "mesh"):
+            added = floors[kind] - floors["none"]
+            md.append(f"| {kind} | {floors[kind]:.4f} | {added:+.4f} | {fmt(added / floors[kind])} |")
+        collider_share = (floors["mesh"] - floors["none"]) / floors["mesh"]
+        md.append("")
+
     # --- Output ------------------------------------------------------------------------------------
     outp = {r["experiment"]: r for r in rows if r["experiment"].startswith("output_")}
     md += ["## Writing a frame", "", "| what | particles | seconds | particles/s |", "|---|---|---|---|"]
@@ -250,6 +268,7 @@ def main(out):
     worst_bin = max((num(r, "share_topology") + num(r, "share_binning") for r in tp if r["threads"] == str(threads_all)),
                     default=float("nan"))
     tr.append(target_row("topology + binning share (worst material)", worst_bin, 0.15, "<="))
+    tr.append(target_row("mesh collider: share of a substep", collider_share, 0.15, "<="))
     if "output_points" in outp:
         tr.append(target_row("points written per second", num(outp["output_points"], "pss"), 1e7, ">="))
     if "output_surface" in outp:

@@ -32,11 +32,19 @@ struct VdbShape {
     static constexpr const char* kType = "vdb";
     std::string file;
     std::string grid = "surface";
+    std::string velocityGrid;  ///< of a sequence: the surface's velocity; empty: from the change of the level set
 
     template <class V>
     static void keys(V& v, VdbShape& s) {
-        v.text(Key{.name = "file", .help = "VDB file holding a level set, relative to the scene file", .required = true}, s.file);
+        v.text(Key{.name = "file",
+                   .help = "VDB file holding a level set, relative to the scene file; with $F (or $F4, padded to 4 digits) a "
+                           "sequence, one file per frame, interpolated in time (a deforming collider)",
+                   .required = true},
+               s.file);
         v.text(Key{.name = "grid", .help = "name of the level set grid in it"}, s.grid);
+        v.text(Key{.name = "velocity_grid",
+                   .help = "a sequence's velocity grid (Houdini's `vel`); empty: the velocity the level sets' change implies"},
+               s.velocityGrid);
         v.check(!s.file.empty(), "file", "must name a VDB file");
     }
 };
