@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include <nlohmann/json.hpp>
+
 #include "io/AtomicFile.h"
 #include "io/PlyWriter.h"
 
@@ -49,7 +51,13 @@ FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, co
     if (ec) throw WriteError(dir_, "cannot create the output directory: " + ec.message());
     csv_ = statsSoFar.empty() ? FrameStats::csvHeader() + "\n" : statsSoFar;
     writeTextAtomically(dir_ + "/stats.csv", csv_);
-    writeTextAtomically(dir_ + "/scene.json", scene.resolvedJson + "\n");
+    // The resolved scene, and where it came from: its asset paths are relative to that file (the render
+    // tool finds the colliders' meshes through it). Not part of the scene's identity.
+    nlohmann::ordered_json resolved = nlohmann::ordered_json::parse(scene.resolvedJson);
+    std::error_code absError;
+    const std::filesystem::path source = std::filesystem::absolute(scene.file, absError);
+    resolved["scene_file"] = absError ? scene.file : source.lexically_normal().string();
+    writeTextAtomically(dir_ + "/scene.json", resolved.dump(2) + "\n");
 }
 
 std::string FrameWriter::framePath(int frame, const char* suffix, const char* ext) const {

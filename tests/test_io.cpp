@@ -167,7 +167,10 @@ TEST(Output, FrameReadsBackWithSameParticles) {
     const auto names = vdbGridNames(writer.framePath(2));
     EXPECT_NE(std::find(names.begin(), names.end(), "surface"), names.end());
     EXPECT_TRUE(fs::exists(dir + "/frames/stats.csv"));
-    EXPECT_TRUE(fs::exists(dir + "/frames/scene.json"));
+    // The resolved scene says where it came from, so tools find the assets its paths are relative to.
+    std::ifstream resolved(dir + "/frames/scene.json");
+    const std::string text((std::istreambuf_iterator<char>(resolved)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("\"scene_file\": \"" + fs::absolute(scene.file).lexically_normal().string() + "\""), std::string::npos) << text;
 }
 
 TEST(Output, InterruptedWriteLeavesNoPartialFile) {
