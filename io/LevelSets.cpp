@@ -3,6 +3,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <openvdb/tools/GridTransformer.h>
+#include <openvdb/tools/LevelSetMeasure.h>
 #include <openvdb/tools/MeshToVolume.h>
 
 #include <algorithm>
@@ -95,7 +96,8 @@ std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std
     return std::make_shared<const LevelSet>(holder, reach);
 }
 
-std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName, double reach) {
+std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName, double reach,
+                                            const Placement& placement) {
     openvdb::initialize();
     if (!std::filesystem::is_regular_file(path)) throw LevelSetError(path + ": no such VDB file");
     openvdb::GridBase::Ptr base;
@@ -117,6 +119,19 @@ std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::
     if (grid->getGridClass() != openvdb::GRID_LEVEL_SET)
         throw LevelSetError(path + ": grid \"" + gridName + "\" is a " + gridClassName(grid->getGridClass()) +
                             ", not a level set; a collider needs a signed distance field (Houdini: VDB from Polygons, distance)");
+    if (!placement.identity()) {
+        // Distances scale with the grid; the index-to-world map gains the placement (OpenVDB's maps act on row
+        // vectors, so the rotation enters transposed).
+        const float s = float(placement.scale);
+        for (auto it = grid->tree().beginValueAll(); it; ++it) it.setValue(*it * s);
+        grid->tree().root().setBackground(grid->background() * s, true);
+        const Mat3d R = placement.rotate.matrix();
+        openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) m(i, j) = placement.scale * R(j, i);
+        m.setTranslation(openvdb::Vec3d(placement.translate[0], placement.translate[1], placement.translate[2]));
+        grid->transform().postMult(m);
+    }
     const openvdb::math::Transform& t = grid->transform();
     const openvdb::Vec3d vs = grid->voxelSize();
     const bool aligned = t.isLinear() && t.hasUniformScale() &&
@@ -132,6 +147,14 @@ std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::
     auto holder = std::make_shared<LevelSet::Grid>();
     holder->grid = grid;
     return std::make_shared<const LevelSet>(holder, reach);
+}
+
+double insideVolume(const LevelSet& ls) { return openvdb::tools::levelSetVolume(*ls.grid().grid); }
+
+TriangleMesh placed(TriangleMesh mesh, const Placement& placement) {
+    if (!placement.identity())
+        for (Vec3d& p : mesh.points) p = placement.apply(p);
+    return mesh;
 }
 
 std::shared_ptr<const VectorField> vdbVectorField(const std::string& path, const std::string& gridName) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/LevelSet.h"
+#include "core/shapes/Placement.h"
 
 namespace mpm {
 
@@ -36,7 +37,15 @@ std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std
 
 /// The level set grid `grid` of a VDB file. A grid that is not a level set (a fog volume) is an error naming
 /// its class; a grid with a rotated or non-uniform transform is resampled onto an axis-aligned one.
-std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& grid, double reach);
+/// With a `placement`, the grid is moved there (its distances scaled with it).
+std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& grid, double reach,
+                                            const Placement& placement = {});
+
+/// The volume inside a level set's zero crossing [m^3] (OpenVDB's levelSetVolume).
+double insideVolume(const LevelSet& ls);
+
+/// The mesh moved by a placement.
+TriangleMesh placed(TriangleMesh mesh, const Placement& placement);
 
 /// The vector grid `grid` of a VDB file (a velocity field).
 std::shared_ptr<const VectorField> vdbVectorField(const std::string& path, const std::string& grid);

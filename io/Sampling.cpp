@@ -26,6 +26,35 @@ std::vector<Vec3d> jitteredGrid(const Shape& shape, double spacing, double jitte
     return out;
 }
 
+/// Bridson's growth from the active samples until none can place a new one.
+template <class Shape, class CellOf, class ClearOf, class Accept>
+void grow(const Shape& shape, const std::vector<Vec3d>& samples, std::vector<int32_t>& active, const Vec3d& lo, const Vec3d& hi, double r,
+          std::mt19937& rng, CellOf&& cellOf, ClearOf&& clearOf, Accept&& accept) {
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    while (!active.empty()) {
+        const std::size_t pick = std::size_t(u01(rng) * active.size()) % active.size();
+        const Vec3d centre = samples[active[pick]];
+        bool found = false;
+        for (int a = 0; a < kPoissonAttempts && !found; ++a) {
+            // Uniform in the spherical shell [r, 2r).
+            Vec3d dir(u01(rng) * 2 - 1, u01(rng) * 2 - 1, u01(rng) * 2 - 1);
+            const double len = dir.norm();
+            if (len < 1e-9 || len > 1.0) continue;
+            const double rad = r * std::cbrt(1.0 + 7.0 * u01(rng));
+            const Vec3d x = centre + dir / len * rad;
+            if ((x.array() < lo.array()).any() || (x.array() >= hi.array()).any() || !shape.contains(x)) continue;
+            if (clearOf(x)) {
+                accept(x);
+                found = true;
+            }
+        }
+        if (!found) {
+            active[pick] = active.back();
+            active.pop_back();
+        }
+    }
+}
+
 template <class Shape>
 std::vector<Vec3d> poissonDiskIn(const Shape& shape, double r, unsigned seed) {
     Vec3d lo, hi;
@@ -48,40 +77,34 @@ std::vector<Vec3d> poissonDiskIn(const Shape& shape, double r, unsigned seed) {
         active.push_back(int32_t(samples.size()));
         samples.push_back(x);
     };
-    // Seeds: the first point inside the shape from a few random tries (disconnected shapes do not occur).
+    // Seeds: the first point inside the shape from a few random tries.
     for (int tries = 0; tries < 1000 && samples.empty(); ++tries) {
         const Vec3d x = lo + Vec3d(u01(rng), u01(rng), u01(rng)).cwiseProduct(hi - lo);
         if (shape.contains(x)) accept(x);
     }
-    while (!active.empty()) {
-        const std::size_t pick = std::size_t(u01(rng) * active.size()) % active.size();
-        const Vec3d centre = samples[active[pick]];
-        bool found = false;
-        for (int a = 0; a < kPoissonAttempts && !found; ++a) {
-            // Uniform in the spherical shell [r, 2r).
-            Vec3d dir(u01(rng) * 2 - 1, u01(rng) * 2 - 1, u01(rng) * 2 - 1);
-            const double len = dir.norm();
-            if (len < 1e-9 || len > 1.0) continue;
-            const double rad = r * std::cbrt(1.0 + 7.0 * u01(rng));
-            const Vec3d x = centre + dir / len * rad;
-            if ((x.array() < lo.array()).any() || (x.array() >= hi.array()).any() || !shape.contains(x)) continue;
-            const Vec3i c = cellOf(x);
-            bool clear = true;
-            for (int i = std::max(0, c[0] - 2); clear && i <= std::min(dims[0] - 1, c[0] + 2); ++i)
-                for (int j = std::max(0, c[1] - 2); clear && j <= std::min(dims[1] - 1, c[1] + 2); ++j)
-                    for (int k = std::max(0, c[2] - 2); clear && k <= std::min(dims[2] - 1, c[2] + 2); ++k) {
-                        const int32_t s = grid[flat(Vec3i(i, j, k))];
-                        if (s >= 0 && (samples[s] - x).squaredNorm() < r * r) clear = false;
-                    }
-            if (clear) {
-                accept(x);
-                found = true;
-            }
-        }
-        if (!found) {
-            active[pick] = active.back();
-            active.pop_back();
-        }
+    auto clearOf = [&](const Vec3d& x) {
+        const Vec3i c = cellOf(x);
+        for (int i = std::max(0, c[0] - 2); i <= std::min(dims[0] - 1, c[0] + 2); ++i)
+            for (int j = std::max(0, c[1] - 2); j <= std::min(dims[1] - 1, c[1] + 2); ++j)
+                for (int k = std::max(0, c[2] - 2); k <= std::min(dims[2] - 1, c[2] + 2); ++k) {
+                    const int32_t s = grid[flat(Vec3i(i, j, k))];
+                    if (s >= 0 && (samples[s] - x).squaredNorm() < r * r) return false;
+                }
+        return true;
+    };
+    grow(shape, samples, active, lo, hi, r, rng, cellOf, clearOf, accept);
+    // A file's shape may come in several pieces: seed each piece the growth did not reach, from the centres of
+    // the background cells, and grow again. (Analytic shapes are connected; their samples stay as they were.)
+    if constexpr (requires { Shape::kMayBeDisconnected; }) {
+        for (int i = 0; i < dims[0]; ++i)
+            for (int j = 0; j < dims[1]; ++j)
+                for (int k = 0; k < dims[2]; ++k) {
+                    if (grid[flat(Vec3i(i, j, k))] >= 0) continue;
+                    const Vec3d x = lo + (Vec3d(i, j, k) + Vec3d::Constant(0.5)) * cell;
+                    if (!shape.contains(x) || !clearOf(x)) continue;
+                    accept(x);
+                    grow(shape, samples, active, lo, hi, r, rng, cellOf, clearOf, accept);
+                }
     }
     return samples;
 }
@@ -112,16 +135,16 @@ std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCe
 
 }  // namespace
 
-std::vector<Vec3d> poissonDisk(const SetShape& shape, double r, unsigned seed) {
+std::vector<Vec3d> poissonDisk(const SetRegion& shape, double r, unsigned seed) {
     return std::visit([&](const auto& s) { return poissonDiskIn(s, r, seed); }, shape);
 }
 
-std::vector<Vec3d> sampleShape(const SetShape& shape, double dx, double particlesPerCell, long long count, Sampling method,
+std::vector<Vec3d> sampleShape(const SetRegion& shape, double dx, double particlesPerCell, long long count, Sampling method,
                                unsigned seed) {
     return std::visit([&](const auto& s) { return sampleIn(s, dx, particlesPerCell, count, method, seed); }, shape);
 }
 
-double shapeVolume(const SetShape& shape) {
+double shapeVolume(const SetRegion& shape) {
     return std::visit([](const auto& s) { return s.volume(); }, shape);
 }
 

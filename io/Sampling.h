@@ -1,11 +1,36 @@
 #pragma once
 // Initial particle positions inside a shape: Poisson-disk sampling (Bridson 2007, "Fast Poisson disk
 // sampling in arbitrary dimensions"), as the thesis did, or a jittered lattice.
+#include <memory>
+#include <variant>
 #include <vector>
 
+#include "core/LevelSet.h"
 #include "io/SceneDesc.h"
 
 namespace mpm {
+
+/// The inside of a level set (phi < 0), as a region to sample: a set filled from a mesh or a VDB file.
+class LevelSetInside {
+public:
+    /// `volume`: what is inside the zero crossing [m^3].
+    LevelSetInside(std::shared_ptr<const LevelSet> ls, double volume)
+        : ls_(std::move(ls)), sampler_(std::make_shared<LevelSet::Sampler>(*ls_)), volume_(volume) {}
+    void bounds(Vec3d& lo, Vec3d& hi) const { ls_->bounds(lo, hi); }
+    /// Serial: the sampler is shared by copies of this region.
+    bool contains(const Vec3d& x) const { return sampler_->phi(x) < 0.0; }
+    double volume() const { return volume_; }
+    /// A mesh or a VDB may hold several pieces: Poisson-disk sampling seeds each one.
+    static constexpr bool kMayBeDisconnected = true;
+
+private:
+    std::shared_ptr<const LevelSet> ls_;
+    std::shared_ptr<LevelSet::Sampler> sampler_;
+    double volume_;
+};
+
+/// What sampling fills: an analytic shape, or the inside of a file's level set.
+using SetRegion = std::variant<Box, Sphere, Cylinder, LevelSetInside>;
 
 /// Fraction of a lattice spacing by which grid sampling jitters each point (keeps min spacing > 0.5 s).
 inline constexpr double kGridJitter = 0.25;
@@ -14,14 +39,14 @@ inline constexpr int kPoissonAttempts = 30;
 
 /// Samples the shape. With count > 0 exactly count points are returned (a random subset of a denser
 /// sampling, which keeps the minimum spacing); otherwise particlesPerCell sets the density.
-std::vector<Vec3d> sampleShape(const SetShape& shape, double dx, double particlesPerCell, long long count, Sampling method,
+std::vector<Vec3d> sampleShape(const SetRegion& shape, double dx, double particlesPerCell, long long count, Sampling method,
                                unsigned seed);
 
 /// Poisson-disk samples with minimum distance r inside the shape.
-std::vector<Vec3d> poissonDisk(const SetShape& shape, double r, unsigned seed);
+std::vector<Vec3d> poissonDisk(const SetRegion& shape, double r, unsigned seed);
 
 /// The shape's volume [m^3].
-double shapeVolume(const SetShape& shape);
+double shapeVolume(const SetRegion& shape);
 
 /// Minimum distance used for a target density of n points per unit volume: Bridson's method fills space
 /// at about 1 / (kPoissonPacking r^3) points per volume (measured here: 1.75-1.8 for 3D with 30 attempts).

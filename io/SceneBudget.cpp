@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "io/Sampling.h"
+#include "io/SceneBuilder.h"
 
 namespace mpm {
 
@@ -62,11 +63,6 @@ long long emissionsWithin(const ParticleSetDesc& d, int frames) {
     return n;
 }
 
-double largestCoordinate(const SetShape& shape) {
-    Vec3d lo, hi;
-    std::visit([&](const auto& s) { s.bounds(lo, hi); }, shape);
-    return std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
-}
 
 }  // namespace
 
@@ -81,10 +77,12 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly) {
         const std::string where = "/sets/" + std::to_string(i);
         SetBudget s;
         s.name = d.name;
-        s.volume = shapeVolume(d.shape);
+        Vec3d lo, hi;
+        setExtent(scene, i, s.volume, lo, hi);
+        const double largestCoordinate = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
         const double expected = d.count > 0 ? double(d.count) : s.volume / cell * d.particlesPerCell;
         if (d.count > 0) s.particles = d.count;
-        else if (countExactly && expected <= kSampleUpTo) s.particles = (long long)sampleShape(d.shape, dx, d.particlesPerCell, 0, d.sampling, d.seed).size();
+        else if (countExactly && expected <= kSampleUpTo) s.particles = (long long)sampleSet(scene, i).positions.size();
         else s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
         s.emissions = emissionsWithin(d, scene.frames);
         double perParticle = 0.0, density = 0.0;
@@ -103,9 +101,9 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly) {
         const double gridPerParticle = kNodesPerCellOfParticles * kBytesPerNode / d.particlesPerCell;
         b.memoryBytes += total * (perParticle + kEngineBytesPerParticle + gridPerParticle + kOutputBytesPerParticle) +
                          double(s.particles) * sizeof(Vec3d);  // the emitter keeps its sampled positions
-        if (largestCoordinate(d.shape) / dx >= kMaxGridCoordinate) {
+        if (largestCoordinate / dx >= kMaxGridCoordinate) {
             std::ostringstream p;
-            p << where << "/shape: lies " << largestCoordinate(d.shape) << " m from the origin, beyond the grid's coordinate range of "
+            p << where << "/shape: lies " << largestCoordinate << " m from the origin, beyond the grid's coordinate range of "
               << "+-2^30 cells (" << kMaxGridCoordinate * dx << " m at dx = " << dx << " m); move it nearer the origin or use a larger dx";
             b.problems.push_back(p.str());
         }

@@ -1,5 +1,6 @@
 #include "io/SceneBuilder.h"
 
+#include <cmath>
 #include <filesystem>
 
 #include "core/Colliders.h"
@@ -18,24 +19,26 @@ std::string besideScene(const SceneDesc& scene, const std::string& file) {
     return p.is_absolute() ? file : (std::filesystem::path(scene.file).parent_path() / p).string();
 }
 
-/// The level set of a file shape, built or read once.
-std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const MeshShape& m) {
-    const double dx = scene.settings.dx, voxel = m.voxelSize > 0.0 ? m.voxelSize : 0.5 * dx;
+/// The level set of a file shape, built or read once: placed by its transform (a collider), or in the file's
+/// own coordinates (`placed` false: a set, sampled there and then placed).
+std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const MeshShape& m, bool place = true) {
+    // In the file's coordinates a scaled shape's cells are dx / scale.
+    const double dx = scene.settings.dx / (place ? 1.0 : m.transform.scale), voxel = m.voxelSize > 0.0 ? m.voxelSize : 0.5 * dx;
     // Outside the band reaches past a leaf's half diagonal of the skip test where it can; inside, the
     // stencil's reach: deeper than that no node or particle has business.
     constexpr double kExteriorCells = 2.0, kInteriorCells = 3.0;
     try {
         const std::string path = besideScene(scene, m.file);
-        return meshLevelSet(readMesh(path), path, voxel, m.thickness, kExteriorCells * dx + 3.0 * voxel, kInteriorCells * dx,
+        return meshLevelSet(place ? placed(readMesh(path), m.transform) : readMesh(path), path, voxel, m.thickness, kExteriorCells * dx + 3.0 * voxel, kInteriorCells * dx,
                             colliderReach(dx));
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
     }
 }
 
-std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v) {
+std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v, bool place = true) {
     try {
-        return vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx));
+        return vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx), place ? v.transform : Placement{});
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
     }
@@ -58,11 +61,13 @@ std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::st
     try {
         const std::vector<int> frames = sequenceFrames(pattern);
         const double reach = colliderReach(scene.settings.dx);
-        const auto first = vdbLevelSet(sequenceFile(pattern, frames.front()), v.grid, reach);  // checked now, not hours later
-        auto load = [pattern, grid = v.grid, vel = v.velocityGrid, reach](int f) {
+        const auto first = vdbLevelSet(sequenceFile(pattern, frames.front()), v.grid, reach, v.transform);  // checked now, not hours later
+        if (!v.velocityGrid.empty() && v.transform.rotate.degrees != 0.0)
+            throw LevelSetError(pattern + ": a rotated sequence cannot turn its velocity grid; leave out \"rotate\" or \"velocity_grid\"");
+        auto load = [pattern, grid = v.grid, vel = v.velocityGrid, reach, placement = v.transform](int f) {
             LevelSetFrame frame;
             const std::string file = sequenceFile(pattern, f);
-            frame.phi = vdbLevelSet(file, grid, reach);
+            frame.phi = vdbLevelSet(file, grid, reach, placement);
             if (!vel.empty()) frame.velocity = vdbVectorField(file, vel);
             return frame;
         };
@@ -94,7 +99,64 @@ std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index) 
         c.shape);
 }
 
+/// Where a set's particles go, in the frame they are sampled in, and the placement from there to the scene.
+struct SetRegionIn {
+    SetRegion region;
+    Placement placement;
+};
+
+SetRegionIn regionOf(const SceneDesc& scene, std::size_t i) {
+    const std::string where = "/sets/" + std::to_string(i) + "/shape";
+    return std::visit(
+        [&]<class S>(const S& shape) -> SetRegionIn {
+            if constexpr (kFromFile<S>) {
+                if constexpr (std::is_same_v<S, VdbShape>) {
+                    if (shape.file.find("$F") != std::string::npos)
+                        throw SceneError(scene.file + ": " + where + "/file: a set is filled once; a $F sequence is for colliders");
+                    if (!shape.velocityGrid.empty())
+                        throw SceneError(scene.file + ": " + where + "/velocity_grid: a set's shape takes no velocity grid");
+                }
+                const auto ls = levelSetOf(scene, where, shape, false);
+                const double volume = insideVolume(*ls);
+                if (!(volume > 0.0))
+                    throw SceneError(scene.file + ": " + where + "/file: " + besideScene(scene, shape.file) +
+                                     ": encloses no volume (an inside-out mesh, or a level set with nothing inside)");
+                return {LevelSetInside(ls, volume), shape.transform};
+            } else {
+                return {SetRegion(shape), Placement{}};
+            }
+        },
+        scene.sets[i].shape);
+}
+
 }  // namespace
+
+SetSamples sampleSet(const SceneDesc& scene, std::size_t i) {
+    const ParticleSetDesc& d = scene.sets[i];
+    const SetRegionIn r = regionOf(scene, i);
+    const double s = r.placement.scale;
+    // Sampled where the file's cells are dx / scale, then placed: the same particles wherever the asset is put.
+    SetSamples out;
+    out.positions = sampleShape(r.region, scene.settings.dx / s, d.particlesPerCell, d.count, d.sampling, d.seed);
+    if (!r.placement.identity())
+        for (Vec3d& x : out.positions) x = r.placement.apply(x);
+    out.volume = shapeVolume(r.region) * s * s * s;
+    return out;
+}
+
+void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo, Vec3d& hi) {
+    const SetRegionIn r = regionOf(scene, i);
+    const double s = r.placement.scale;
+    volume = shapeVolume(r.region) * s * s * s;
+    Vec3d a, b;
+    std::visit([&](const auto& shape) { shape.bounds(a, b); }, r.region);
+    lo = Vec3d::Constant(INFINITY), hi = Vec3d::Constant(-INFINITY);
+    for (int c = 0; c < 8; ++c) {
+        const Vec3d corner((c & 1) ? b[0] : a[0], (c & 2) ? b[1] : a[1], (c & 4) ? b[2] : a[2]);
+        const Vec3d x = r.placement.apply(corner);
+        lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+    }
+}
 
 SpeciesLayout speciesLayout(const SceneDesc& scene) {
     SpeciesLayout out;
@@ -120,12 +182,13 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene) {
         Emitter e;
         e.species = species;
         e.set = uint16_t(i);
-        e.positions = sampleShape(d.shape, scene.settings.dx, d.particlesPerCell, d.count, d.sampling, d.seed);
+        SetSamples samples = sampleSet(scene, i);
+        e.positions = std::move(samples.positions);
         if (e.positions.empty())
             throw SceneError(scene.file + ": /sets/" + std::to_string(i) +
                              "/shape: no particle fits in the shape at dx = " + std::to_string(scene.settings.dx));
         e.velocity = d.velocity;
-        e.volume = float(shapeVolume(d.shape) / double(e.positions.size()));
+        e.volume = float(samples.volume / double(e.positions.size()));
         const float density = std::visit([](const auto& p) { return p.density; }, params);
         e.mass = float(e.volume * density * d.massScale);
         e.startFrame = d.startFrame;

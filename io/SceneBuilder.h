@@ -20,6 +20,18 @@ struct SpeciesLayout {
 
 SpeciesLayout speciesLayout(const SceneDesc& scene);
 
+/// Set `i`'s particles: positions in the scene (a file's shape is sampled in the file's own coordinates and
+/// then placed by its transform, so moving an asset moves its particles exactly) and the volume they fill.
+/// Reads the set's file, if it has one; errors name the scene, the key and the file.
+struct SetSamples {
+    std::vector<Vec3d> positions;
+    double volume = 0.0;
+};
+SetSamples sampleSet(const SceneDesc& scene, std::size_t i);
+
+/// Set `i`'s volume and its bounds in the scene, without sampling it (reads its file, if it has one).
+void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo, Vec3d& hi);
+
 /// Builds the simulation the scene describes. Throws SceneError when a set's shape holds no particle.
 std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene);
 

@@ -96,7 +96,7 @@ TEST(SceneFile, EveryInvalidFieldIsNamed) {
 
 TEST(Sampling, PoissonDiskMeetsCountSpacingAndShape) {
     const Sphere sphere{Vec3d(1, 2, 3), 0.2};
-    const SetShape ball = sphere;
+    const SetRegion ball = sphere;
     const double r = 0.02;
     const auto pts = poissonDisk(ball, r, 5);
     ASSERT_GT(pts.size(), 500u);

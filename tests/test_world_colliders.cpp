@@ -14,9 +14,11 @@
 #include "io/LevelSets.h"
 #include "io/SceneBuilder.h"
 #include "io/SceneReader.h"
+#include "tests/TestAssets.h"
 
 namespace fs = std::filesystem;
 using namespace mpm;
+using mpm::test::icosphereObj;
 
 namespace {
 
@@ -25,38 +27,6 @@ std::string tempDir(const std::string& name) {
     fs::remove_all(p);
     fs::create_directories(p);
     return p.string();
-}
-
-/// An icosphere of radius r about c, subdivided `levels` times (20 * 4^levels triangles), as OBJ text.
-std::string icosphereObj(const Vec3d& c, double r, int levels) {
-    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-    std::vector<Vec3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                            {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-    for (Vec3d& p : v) p.normalize();
-    std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                                      {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                                      {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
-    for (int l = 0; l < levels; ++l) {
-        std::map<std::pair<int, int>, int> mid;
-        auto middle = [&](int a, int b) {
-            const auto key = std::minmax(a, b);
-            const auto it = mid.find(key);
-            if (it != mid.end()) return it->second;
-            v.push_back((v[a] + v[b]).normalized());
-            return mid[key] = int(v.size()) - 1;
-        };
-        std::vector<Eigen::Vector3i> g;
-        for (const Eigen::Vector3i& tri : f) {
-            const int ab = middle(tri[0], tri[1]), bc = middle(tri[1], tri[2]), ca = middle(tri[2], tri[0]);
-            g.insert(g.end(), {{tri[0], ab, ca}, {tri[1], bc, ab}, {tri[2], ca, bc}, {ab, bc, ca}});
-        }
-        f = g;
-    }
-    std::ostringstream s;
-    s.precision(17);
-    for (const Vec3d& p : v) s << "v " << (c + r * p).transpose() << "\n";
-    for (const Eigen::Vector3i& tri : f) s << "f " << tri[0] + 1 << " " << tri[1] + 1 << " " << tri[2] + 1 << "\n";
-    return s.str();
 }
 
 /// A square cup: outer box [-a, a] x [0, h] x [-a, a] less the inner [-a + w, a - w] x [w, h + ...], as a

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Makes the assets of the shipped scenes in scenes/assets/: closed triangle meshes written as OBJ (a glass, a
-bulldozer blade) and a rock as a VDB level set (through Debian's python3-openvdb, from a noisy icosphere).
+bulldozer blade, a torus) and a rock as a VDB level set (through Debian's python3-openvdb, from a noisy icosphere).
 Deterministic: the same files every run. Usage: /usr/bin/python3 tools/make_assets.py [OUT_DIR]"""
 import math
 import os
@@ -118,10 +118,26 @@ def rock(out):
     write_obj(os.path.join(out, "rock.obj"), pts, F, "the rock of rock.vdb, as a mesh (for renders)")
 
 
+def torus(out):
+    # A ring in file units (major radius 1, minor 0.4, about +Y): a shape no box or sphere makes; the scene
+    # places and scales it with "transform".
+    R, r, nu, nv = 1.0, 0.4, 64, 24
+    verts = [((R + r * math.cos(b)) * math.cos(a), r * math.sin(b), (R + r * math.cos(b)) * math.sin(a))
+             for a in (2 * math.pi * i / nu for i in range(nu)) for b in (2 * math.pi * j / nv for j in range(nv))]
+    faces = []
+    for i in range(nu):
+        for j in range(nv):
+            a, b = i * nv + j, i * nv + (j + 1) % nv
+            c, d = ((i + 1) % nu) * nv + (j + 1) % nv, ((i + 1) % nu) * nv + j
+            faces += [(a, b, c), (a, c, d)]
+    write_obj(os.path.join(out, "torus.obj"), verts, faces, "a torus, major radius 1, minor radius 0.4, file units")
+
+
 if __name__ == "__main__":
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "scenes", "assets")
     os.makedirs(out, exist_ok=True)
     glass(out)
     blade(out)
     rock(out)
+    torus(out)
     print("wrote", ", ".join(sorted(os.listdir(out))), "in", os.path.abspath(out))

@@ -326,6 +326,15 @@ def sequence_file(pattern, frame):
     return pattern[:m.start()] + str(frame).zfill(width) + pattern[m.end():]
 
 
+def placement_matrix(t):
+    """A file shape's `transform`: x = translate + R (scale x_file)."""
+    if not t:
+        return Matrix.Identity(4)
+    r = t.get("rotate", {"axis": [0, 1, 0], "degrees": 0})
+    rot = Matrix.Rotation(math.radians(r["degrees"]), 4, vec(r["axis"]).normalized())
+    return Matrix.Translation(vec(t.get("translate", [0, 0, 0]))) @ rot @ Matrix.Scale(float(t.get("scale", 1.0)), 4)
+
+
 def collider_object(c, scene, frame, root):
     """The collider's object at its rest placement and the matrix placing it; None for planes and for what
     cannot be drawn."""
@@ -342,14 +351,14 @@ def collider_object(c, scene, frame, root):
             print("render_blender: warning: collider mesh %s not found; not drawn" % path)
             return None
         obj = file_mesh_object(path)
-        return (obj, Matrix.Identity(4)) if obj else None
+        return (obj, placement_matrix(c.get("transform"))) if obj else None
     if kind == "vdb":
         path = sequence_file(scene.asset(c["file"]), frame)
         if not os.path.isfile(path):
             print("render_blender: warning: collider level set %s not found; not drawn" % path)
             return None
         made = level_set_mesh(path, c.get("grid", "surface"), root, "collider_vdb")
-        return (made[0], Matrix.Identity(4)) if made else None
+        return (made[0], placement_matrix(c.get("transform"))) if made else None
     return None
 
 

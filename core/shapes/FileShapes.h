@@ -1,8 +1,10 @@
 #pragma once
 // Shapes the user brings as files, resolved into level sets when a scene is built (io/LevelSets.h): a triangle
-// mesh (any format assimp reads) and a level set grid of a VDB file. Paths are relative to the scene file.
+// mesh (any format assimp reads) and a level set grid of a VDB file. Paths are relative to the scene file. As
+// colliders they are solids (or containers); as particle sets, their inside is filled.
 #include <string>
 
+#include "core/shapes/Placement.h"
 #include "materials/Parameters.h"
 
 namespace mpm {
@@ -12,6 +14,7 @@ struct MeshShape {
     std::string file;
     double voxelSize = 0.0;  ///< of the distance field; 0: half the grid spacing
     double thickness = 0.0;  ///< > 0: a shell of this half-thickness around the surface (open meshes need one)
+    Placement transform;     ///< from the file's coordinates to the scene's
 
     template <class V>
     static void keys(V& v, MeshShape& s) {
@@ -24,6 +27,7 @@ struct MeshShape {
                              "an open mesh such as a terrain or a sheet)",
                      .lo = 0.0, .hi = kHuge, .unit = "m"},
                  s.thickness);
+        v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"}, [&](auto& t) { Placement::keys(t, s.transform); });
         v.check(!s.file.empty(), "file", "must name a mesh file");
     }
 };
@@ -33,6 +37,7 @@ struct VdbShape {
     std::string file;
     std::string grid = "surface";
     std::string velocityGrid;  ///< of a sequence: the surface's velocity; empty: from the change of the level set
+    Placement transform;       ///< from the file's coordinates to the scene's
 
     template <class V>
     static void keys(V& v, VdbShape& s) {
@@ -45,6 +50,7 @@ struct VdbShape {
         v.text(Key{.name = "velocity_grid",
                    .help = "a sequence's velocity grid (Houdini's `vel`); empty: the velocity the level sets' change implies"},
                s.velocityGrid);
+        v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"}, [&](auto& t) { Placement::keys(t, s.transform); });
         v.check(!s.file.empty(), "file", "must name a VDB file");
     }
 };

@@ -1,7 +1,7 @@
 #pragma once
-// The closed lists of shapes: those that fill particle sets (a finite volume, `contains`, `volume`,
-// `bounds`) and those that collide (a signed distance, positive outside, and its normal; or a file that
-// becomes a level set when the scene is built). Each shape is one file with its formula and scene keys; a
+// The closed lists of shapes: those that fill particle sets (a finite volume with `contains`, `volume` and
+// `bounds`, or a file whose level set's inside is filled) and those that collide (a signed distance, positive
+// outside, and its normal; or a file that becomes a level set when the scene is built). Each shape is one file with its formula and scene keys; a
 // new one is that file and one entry in a list here.
 #include <string>
 #include <variant>
@@ -15,7 +15,7 @@
 
 namespace mpm {
 
-using SetShape = std::variant<Box, Sphere, Cylinder>;
+using SetShape = std::variant<Box, Sphere, Cylinder, MeshShape, VdbShape>;
 using ColliderShape = std::variant<Plane, Sphere, Box, Cylinder, MeshShape, VdbShape>;
 
 /// The `type` names of a list's shapes, in order.

@@ -1,0 +1,184 @@
+// Sources from the user's world: particle sets filled from meshes and VDB level sets, placed by a transform,
+// and the same transform on colliders. Each check is a scene read by the real parser, with its assets
+// written by the test.
+#include <gtest/gtest.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/LevelSetSphere.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "io/SceneBuilder.h"
+#include "io/SceneReader.h"
+#include "tests/TestAssets.h"
+
+namespace fs = std::filesystem;
+using namespace mpm;
+using mpm::test::icosphereObj;
+
+namespace {
+
+constexpr double kDx = 0.02, kRadius = 10 * kDx, kDensity = 1000.0;  // r = 10 dx, 8 particles per cell
+
+std::string tempDir(const std::string& name) {
+    const fs::path p = fs::temp_directory_path() / ("mpm_sources_" + name + "_" + std::to_string(::getpid()));
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p.string();
+}
+
+std::string write(const std::string& path, const std::string& text) {
+    std::ofstream(path) << text;
+    return path;
+}
+
+/// A VDB sphere level set of radius r about c, as Houdini would write one.
+void writeVdbSphere(const std::string& path, const Vec3d& c, double r, double voxel) {
+    openvdb::initialize();
+    auto g = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(r), openvdb::Vec3f(float(c[0]), float(c[1]), float(c[2])),
+                                                                      float(voxel), 3.0f);
+    g->setName("surface");
+    openvdb::io::File(path).write({g});
+}
+
+/// A scene of one water set of the given shape (JSON), no gravity.
+std::string sceneText(const std::string& shape) {
+    return R"({"simulation": {"frames": 1, "dx": 0.02, "gravity": [0, 0, 0]},
+               "sets": [{"material": "water", "material_params": {"density": 1000}, "shape": )" +
+           shape + "}]}";
+}
+
+struct Filled {
+    std::vector<Vec3d> x;
+    double mass = 0.0;
+};
+
+Filled fill(const std::string& dir, const std::string& shape) {
+    const SceneDesc scene = parseScene(sceneText(shape), dir + "/scene.json");
+    auto sim = buildSimulation(scene);
+    sim->emitDue();
+    Filled out;
+    const ParticleArrays& P = particlesOf(sim->species()[0]);
+    out.x = P.x;
+    for (float m : P.mass) out.mass += double(m);
+    return out;
+}
+
+void expectSphereFilled(const Filled& f, const Vec3d& centre, double radius) {
+    const double volume = 4.0 / 3.0 * M_PI * radius * radius * radius;
+    EXPECT_NEAR(f.mass, volume * kDensity, 0.02 * volume * kDensity);
+    // Eight per cell: the count follows the volume as the analytic sphere's does.
+    const double expected = volume / (kDx * kDx * kDx) * 8.0;
+    EXPECT_NEAR(double(f.x.size()), expected, 0.03 * expected);
+    double farthest = 0.0;
+    for (const Vec3d& x : f.x) farthest = std::max(farthest, (x - centre).norm());
+    EXPECT_LE(farthest, radius + 0.25 * kDx);
+    EXPECT_GE(farthest, radius - 0.5 * kDx);  // filled to the surface, not a smaller ball
+}
+
+}  // namespace
+
+TEST(MeshSource, AClosedIcosphereFillsWithTheSpheresMass) {
+    const std::string dir = tempDir("ico");
+    write(dir + "/ball.obj", icosphereObj(Vec3d::Zero(), kRadius, 4));  // 5120 triangles
+    const Filled f = fill(dir, R"({"type": "mesh", "file": "ball.obj"})");
+    expectSphereFilled(f, Vec3d::Zero(), kRadius);
+}
+
+TEST(VdbSource, AVdbSphereFillsWithTheSpheresMass) {
+    const std::string dir = tempDir("vdb");
+    writeVdbSphere(dir + "/ball.vdb", Vec3d(0.05, 0, 0), kRadius, 0.5 * kDx);
+    const Filled f = fill(dir, R"({"type": "vdb", "file": "ball.vdb", "grid": "surface"})");
+    expectSphereFilled(f, Vec3d(0.05, 0, 0), kRadius);
+}
+
+TEST(MeshSource, ATranslatedAssetGivesTheSameParticlesDisplacedExactly) {
+    const std::string dir = tempDir("move");
+    write(dir + "/ball.obj", icosphereObj(Vec3d::Zero(), kRadius, 4));
+    writeVdbSphere(dir + "/ball.vdb", Vec3d::Zero(), kRadius, 0.5 * kDx);
+    for (const char* file : {"ball.obj", "ball.vdb"}) {
+        const std::string type = std::string(file) == "ball.obj" ? "mesh" : "vdb";
+        const Filled here = fill(dir, R"({"type": ")" + type + R"(", "file": ")" + file + "\"}");
+        const Filled there = fill(dir, R"({"type": ")" + type + R"(", "file": ")" + file + R"(", "transform": {"translate": [10, 0, 0]}})");
+        ASSERT_EQ(here.x.size(), there.x.size()) << file;
+        double worst = 0.0;
+        for (std::size_t i = 0; i < here.x.size(); ++i) worst = std::max(worst, (there.x[i] - here.x[i] - Vec3d(10, 0, 0)).norm());
+        EXPECT_LT(worst, 1e-12) << file;
+        EXPECT_DOUBLE_EQ(here.mass, there.mass) << file;
+    }
+}
+
+TEST(MeshSource, ScaleAndRotationPlaceTheAsset) {
+    const std::string dir = tempDir("scale");
+    // A unit icosphere scaled to r = 10 dx, turned and moved: the particles fill that sphere.
+    write(dir + "/unit.obj", icosphereObj(Vec3d::Zero(), 1.0, 4));
+    const Filled f = fill(dir, R"({"type": "mesh", "file": "unit.obj", "transform": {"scale": 0.2, "translate": [1, 2, 3],
+                                   "rotate": {"axis": [1, 1, 0], "degrees": 30}}})");
+    expectSphereFilled(f, Vec3d(1, 2, 3), kRadius);
+}
+
+TEST(MeshSource, EveryPieceOfAMeshIsFilled) {
+    // Two balls in one file: Poisson-disk growth from one seed would fill one of them.
+    const std::string dir = tempDir("pieces");
+    const std::string one = icosphereObj(Vec3d::Zero(), 0.5 * kRadius, 3);
+    // OBJ indices are file-wide: the second ball's faces follow the first ball's vertices.
+    int vertices = 0;
+    std::istringstream first(one);
+    for (std::string line; std::getline(first, line);) vertices += line.rfind("v ", 0) == 0;
+    std::ostringstream second;
+    std::istringstream lines(icosphereObj(Vec3d(1, 0, 0), 0.5 * kRadius, 3));
+    for (std::string line; std::getline(lines, line);) {
+        int a, b, c;
+        if (std::sscanf(line.c_str(), "f %d %d %d", &a, &b, &c) == 3)
+            second << "f " << a + vertices << " " << b + vertices << " " << c + vertices << "\n";
+        else
+            second << line << "\n";
+    }
+    write(dir + "/two.obj", one + second.str());
+    const Filled f = fill(dir, R"({"type": "mesh", "file": "two.obj"})");
+    int left = 0, right = 0;
+    for (const Vec3d& x : f.x) (x[0] < 0.5 ? left : right)++;
+    EXPECT_GT(left, 100);
+    EXPECT_NEAR(double(right), double(left), 0.05 * left);
+}
+
+TEST(MeshCollider, ATransformPlacesTheCollider) {
+    const std::string dir = tempDir("collider");
+    write(dir + "/unit.obj", icosphereObj(Vec3d::Zero(), 1.0, 4));
+    const std::string text = R"({"simulation": {"frames": 1, "dx": 0.02},
+        "sets": [{"material": "water", "shape": {"type": "box", "min": [0, 1, 0], "max": [0.1, 1.1, 0.1]}}],
+        "colliders": [{"type": "mesh", "file": "unit.obj", "transform": {"scale": 0.2, "translate": [1, 0, 0]}}]})";
+    auto sim = buildSimulation(parseScene(text, dir + "/scene.json"));
+    const Collider& c = *sim->colliders()[0];
+    EXPECT_NEAR(c.signedDistance(Vec3d(1.16, 0, 0), 0.0), -0.04, 0.005);  // 4 cm inside its surface (the band)
+    EXPECT_NEAR(c.signedDistance(Vec3d(1.25, 0, 0), 0.0), 0.05, 0.005);  // 5 cm outside its surface
+}
+
+TEST(FileSource, BadFilesAreNamedErrors) {
+    const std::string dir = tempDir("bad");
+    // An open mesh: one triangle.
+    write(dir + "/sheet.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    auto fog = openvdb::FloatGrid::create(0.0f);
+    fog->setName("density");
+    fog->setGridClass(openvdb::GRID_FOG_VOLUME);
+    fog->tree().setValue(openvdb::Coord(0, 0, 0), 1.0f);
+    openvdb::io::File(dir + "/fog.vdb").write({fog});
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {R"({"type": "mesh", "file": "missing.obj"})", "missing.obj"},
+        {R"({"type": "mesh", "file": "sheet.obj"})", "open"},
+        {R"({"type": "vdb", "file": "fog.vdb", "grid": "density"})", "not a level set"},
+        {R"({"type": "vdb", "file": "wall_$F4.vdb"})", "sequence"},
+        {R"({"type": "mesh", "file": "sheet.obj", "transform": {"scale": 0}})", "scale"},
+    };
+    for (const auto& [shape, says] : cases) {
+        try {
+            buildSimulation(parseScene(sceneText(shape), dir + "/scene.json"));
+            ADD_FAILURE() << shape << " was accepted";
+        } catch (const SceneError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("scene.json: /sets/0/shape"), std::string::npos) << what;
+            EXPECT_NE(what.find(says), std::string::npos) << what;
+        }
+    }
+}
