@@ -49,7 +49,11 @@ int Simulation::addSpecies(AnySpecies species) {
     return int(state_.species.size()) - 1;
 }
 
-void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set) {
+void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
+                              const std::vector<Vec3f>& perParticle) {
+    if (!perParticle.empty() && perParticle.size() != x.size())
+        throw std::logic_error("addParticles: one velocity per particle, or none");
+    float fastest = x.empty() ? 0.0f : v.norm();
     std::visit(
         [&](auto& sp) {
             using M = typename std::decay_t<decltype(sp)>::Material;
@@ -57,6 +61,10 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
             const std::size_t n0 = P.size(), n = x.size();
             P.x.insert(P.x.end(), x.begin(), x.end());
             P.v.resize(n0 + n, v);
+            for (std::size_t i = 0; i < perParticle.size(); ++i) {
+                P.v[n0 + i] += perParticle[i];
+                fastest = std::max(fastest, P.v[n0 + i].norm());
+            }
             P.C.resize(n0 + n, Mat3f::Zero());
             P.mass.resize(n0 + n, mass);
             P.volume0.resize(n0 + n, volume);
@@ -71,7 +79,7 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
             for (std::size_t i = n0; i < n0 + n; ++i) key = std::min(key, M::stiffnessKey(sp.state, i));
         },
         state_.species.at(s));
-    if (!x.empty()) state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, v.norm());
+    state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, fastest);
 }
 
 void Simulation::restore(SimState state) {
@@ -94,7 +102,7 @@ void Simulation::emitDue() {
     if (state_.emittedFrame == state_.frame) return;
     state_.emittedFrame = state_.frame;
     for (const Emitter& e : emitters_)
-        if (e.emitsAt(state_.frame)) addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set);
+        if (e.emitsAt(state_.frame)) addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities);
 }
 
 double Simulation::cflTimeStep() const {

@@ -44,6 +44,7 @@ struct Emitter {
     uint16_t set = 0;
     std::vector<Vec3d> positions;
     Vec3f velocity = Vec3f::Zero();
+    std::vector<Vec3f> velocities;  ///< per particle, added to `velocity` (a point cloud's); empty: none
     float mass = 0.0f, volume = 0.0f;  ///< per particle
     int startFrame = 0;
     int durationFrames = 1;  ///< emissions happen in [startFrame, startFrame + durationFrames)
@@ -73,7 +74,9 @@ public:
     const SimulationSettings& settings() const { return settings_; }
     int addSpecies(AnySpecies species);
     /// Appends particles at rest state (F = I, J = 1, C = 0) and gives them fresh ids.
-    void addParticles(int species, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set);
+    /// `perParticle`, when not empty, is added to v particle by particle.
+    void addParticles(int species, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
+                      const std::vector<Vec3f>& perParticle = {});
     void addCollider(std::unique_ptr<Collider> c) { colliders_.push_back(std::move(c)); }
     void addEmitter(Emitter e) { emitters_.push_back(std::move(e)); }
 

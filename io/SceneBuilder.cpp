@@ -7,6 +7,7 @@
 #include "core/LevelSetGeometry.h"
 #include "core/LevelSetSequence.h"
 #include "io/LevelSets.h"
+#include "io/PointFile.h"
 #include "io/Sampling.h"
 
 namespace mpm {
@@ -122,6 +123,8 @@ SetRegionIn regionOf(const SceneDesc& scene, std::size_t i) {
                     throw SceneError(scene.file + ": " + where + "/file: " + besideScene(scene, shape.file) +
                                      ": encloses no volume (an inside-out mesh, or a level set with nothing inside)");
                 return {LevelSetInside(ls, volume), shape.transform};
+            } else if constexpr (std::is_same_v<S, PointsShape>) {
+                throw std::logic_error("regionOf: a point cloud is no region");
             } else {
                 return {SetRegion(shape), Placement{}};
             }
@@ -129,10 +132,43 @@ SetRegionIn regionOf(const SceneDesc& scene, std::size_t i) {
         scene.sets[i].shape);
 }
 
+/// A point cloud set: one particle per point, placed; each fills its pscale's cube (2 pscale a side, the
+/// spacing of points made with radius pscale), or without radii the set's particles_per_cell.
+SetSamples pointCloudSet(const SceneDesc& scene, std::size_t i, const PointsShape& shape) {
+    const ParticleSetDesc& d = scene.sets[i];
+    const std::string where = "/sets/" + std::to_string(i) + "/shape/file";
+    PointCloudData cloud;
+    try {
+        cloud = readPlyPoints(besideScene(scene, shape.file));
+    } catch (const PointFileError& e) {
+        throw SceneError(scene.file + ": " + where + ": " + e.what());
+    }
+    if (d.count > 0 && (long long)cloud.x.size() != d.count)
+        throw SceneError(scene.file + ": /sets/" + std::to_string(i) + "/count: a point cloud gives one particle per point (" +
+                         std::to_string(cloud.x.size()) + " in " + shape.file + "); leave count out");
+    const Placement& t = shape.transform;
+    SetSamples out;
+    out.positions = std::move(cloud.x);
+    for (Vec3d& x : out.positions) x = t.apply(x);
+    const Mat3f turn = t.rotate.matrix().cast<float>();
+    for (const Vec3f& v : cloud.v) out.velocities.push_back(turn * v);
+    if (!cloud.pscale.empty()) {
+        double sum = 0.0;
+        for (float r : cloud.pscale) sum += std::pow(2.0 * double(r) * t.scale, 3);
+        out.volume = sum;
+        if (!(out.volume > 0.0)) throw SceneError(scene.file + ": " + where + ": " + shape.file + ": every pscale is zero");
+    } else {
+        const double dx = scene.settings.dx;
+        out.volume = double(out.positions.size()) * dx * dx * dx / d.particlesPerCell;
+    }
+    return out;
+}
+
 }  // namespace
 
 SetSamples sampleSet(const SceneDesc& scene, std::size_t i) {
     const ParticleSetDesc& d = scene.sets[i];
+    if (const auto* points = std::get_if<PointsShape>(&d.shape)) return pointCloudSet(scene, i, *points);
     const SetRegionIn r = regionOf(scene, i);
     const double s = r.placement.scale;
     // Sampled where the file's cells are dx / scale, then placed: the same particles wherever the asset is put.
@@ -145,6 +181,13 @@ SetSamples sampleSet(const SceneDesc& scene, std::size_t i) {
 }
 
 void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo, Vec3d& hi) {
+    if (const auto* points = std::get_if<PointsShape>(&scene.sets[i].shape)) {
+        const SetSamples s = pointCloudSet(scene, i, *points);
+        volume = s.volume;
+        lo = Vec3d::Constant(INFINITY), hi = Vec3d::Constant(-INFINITY);
+        for (const Vec3d& x : s.positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+        return;
+    }
     const SetRegionIn r = regionOf(scene, i);
     const double s = r.placement.scale;
     volume = shapeVolume(r.region) * s * s * s;
@@ -188,6 +231,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene) {
             throw SceneError(scene.file + ": /sets/" + std::to_string(i) +
                              "/shape: no particle fits in the shape at dx = " + std::to_string(scene.settings.dx));
         e.velocity = d.velocity;
+        e.velocities = std::move(samples.velocities);
         e.volume = float(samples.volume / double(e.positions.size()));
         const float density = std::visit([](const auto& p) { return p.density; }, params);
         e.mass = float(e.volume * density * d.massScale);

@@ -25,6 +25,7 @@ SpeciesLayout speciesLayout(const SceneDesc& scene);
 /// Reads the set's file, if it has one; errors name the scene, the key and the file.
 struct SetSamples {
     std::vector<Vec3d> positions;
+    std::vector<Vec3f> velocities;  ///< a point cloud's, when its file has them
     double volume = 0.0;
 };
 SetSamples sampleSet(const SceneDesc& scene, std::size_t i);

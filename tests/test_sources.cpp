@@ -182,3 +182,81 @@ TEST(FileSource, BadFilesAreNamedErrors) {
         }
     }
 }
+
+namespace {
+/// A PLY of the given points in binary little-endian doubles (as Houdini writes P when asked for 64 bits),
+/// with velocities and pscale.
+void writeBinaryPly(const std::string& path, const std::vector<Vec3d>& x, const std::vector<Vec3f>& v, float pscale) {
+    std::ofstream out(path, std::ios::binary);
+    out << "ply\nformat binary_little_endian 1.0\ncomment written by the test\nelement vertex " << x.size()
+        << "\nproperty double x\nproperty double y\nproperty double z\nproperty float vx\nproperty float vy\nproperty float vz\n"
+           "property float pscale\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n";
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        out.write(reinterpret_cast<const char*>(x[i].data()), 3 * sizeof(double));
+        out.write(reinterpret_cast<const char*>(v[i].data()), 3 * sizeof(float));
+        out.write(reinterpret_cast<const char*>(&pscale), sizeof(float));
+    }
+}
+}  // namespace
+
+TEST(PointsSource, APlyCloudGivesOneParticlePerPointWhereItIs) {
+    const std::string dir = tempDir("ply");
+    std::vector<Vec3d> x;
+    std::vector<Vec3f> v;
+    // 1,000 points 1 cm apart (pscale 5 mm), moving at (1, 0, 0.5) m/s, 1e4 m from the origin.
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j)
+            for (int k = 0; k < 10; ++k) {
+                x.emplace_back(1e4 + 0.01 * i + 1e-7 * j, 0.5 + 0.01 * j, 0.01 * k);
+                v.emplace_back(1.0f, 0.0f, 0.5f);
+            }
+    writeBinaryPly(dir + "/cloud.ply", x, v, 0.005f);
+    const SceneDesc scene = parseScene(sceneText(R"({"type": "points", "file": "cloud.ply"})"), dir + "/scene.json");
+    auto sim = buildSimulation(scene);
+    sim->emitDue();
+    const ParticleArrays& P = particlesOf(sim->species()[0]);
+    ASSERT_EQ(P.size(), x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        EXPECT_EQ(P.x[i], x[i]) << i;  // doubles kept bit for bit
+        EXPECT_EQ(P.v[i], v[i]) << i;
+        EXPECT_EQ(P.id[i], int32_t(i));  // ids in file order
+    }
+    // Each point fills its pscale's cube: 1 cm^3 of water, 1 g.
+    EXPECT_NEAR(P.mass[0], 1e-3f, 1e-7f);
+    // The same cloud in ASCII reads the same.
+    std::ofstream ascii(dir + "/cloud.txt.ply");
+    ascii.precision(17);
+    ascii << "ply\nformat ascii 1.0\nelement vertex " << x.size() << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+    for (const Vec3d& p : x) ascii << p.transpose() << "\n";
+    ascii.close();
+    auto sim2 = buildSimulation(parseScene(sceneText(R"({"type": "points", "file": "cloud.txt.ply", "transform": {"translate": [1, 0, 0]}})"),
+                                           dir + "/scene.json"));
+    sim2->emitDue();
+    const ParticleArrays& Q = particlesOf(sim2->species()[0]);
+    ASSERT_EQ(Q.size(), x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) EXPECT_EQ(Q.x[i], x[i] + Vec3d(1, 0, 0)) << i;
+    // Without pscale, a point fills dx^3 / particles_per_cell.
+    EXPECT_NEAR(Q.mass[0], 1000.0 * kDx * kDx * kDx / 8.0, 1e-9);
+}
+
+TEST(PointsSource, BadCloudsAreNamedErrors) {
+    const std::string dir = tempDir("badply");
+    write(dir + "/empty.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n");
+    write(dir + "/noxyz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float u\nproperty float w\nend_header\n1 2\n");
+    write(dir + "/short.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n");
+    write(dir + "/notply.ply", "solid stl\n");
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"missing.ply", "no such point file"}, {"empty.ply", "no points"},     {"noxyz.ply", "no x, y, z properties (they have: u, w)"},
+        {"short.ply", "truncated"},            {"notply.ply", "not a PLY file"}};
+    for (const auto& [file, says] : cases) {
+        try {
+            buildSimulation(parseScene(sceneText(R"({"type": "points", "file": ")" + file + "\"}"), dir + "/scene.json"));
+            ADD_FAILURE() << file << " was accepted";
+        } catch (const SceneError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("scene.json: /sets/0/shape/file: "), std::string::npos) << what;
+            EXPECT_NE(what.find(file), std::string::npos) << what;
+            EXPECT_NE(what.find(says), std::string::npos) << what;
+        }
+    }
+}

@@ -55,4 +55,22 @@ struct VdbShape {
     }
 };
 
+/// A point cloud (PLY): each point becomes one particle, with the file's velocities and radii when it has them.
+struct PointsShape {
+    static constexpr const char* kType = "points";
+    std::string file;
+    Placement transform;  ///< from the file's coordinates to the scene's (velocities turn with it)
+
+    template <class V>
+    static void keys(V& v, PointsShape& s) {
+        v.text(Key{.name = "file",
+                   .help = "PLY point cloud (ASCII or binary), relative to the scene file: x, y, z; vx, vy, vz (or v.x, ...) and "
+                           "pscale when present",
+                   .required = true},
+               s.file);
+        v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"}, [&](auto& t) { Placement::keys(t, s.transform); });
+        v.check(!s.file.empty(), "file", "must name a PLY file");
+    }
+};
+
 }  // namespace mpm

@@ -15,7 +15,7 @@
 
 namespace mpm {
 
-using SetShape = std::variant<Box, Sphere, Cylinder, MeshShape, VdbShape>;
+using SetShape = std::variant<Box, Sphere, Cylinder, MeshShape, VdbShape, PointsShape>;
 using ColliderShape = std::variant<Plane, Sphere, Box, Cylinder, MeshShape, VdbShape>;
 
 /// The `type` names of a list's shapes, in order.

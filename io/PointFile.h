@@ -1,0 +1,30 @@
+#pragma once
+// Point clouds from the user's tools as particle sets: the vertices of a PLY file (ASCII or binary, either
+// byte order, as Houdini, Blender and CloudCompare write them) with their positions and, when the file has
+// them, velocities (vx, vy, vz, or Houdini's v.x...) and radii (pscale). Our own reader: assimp, the mesh
+// library used elsewhere, keeps a PLY's positions but drops custom vertex properties such as velocity.
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/Types.h"
+
+namespace mpm {
+
+/// A point file that cannot serve as a particle set. what() reads "FILE: problem".
+class PointFileError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+struct PointCloudData {
+    std::vector<Vec3d> x;
+    std::vector<Vec3f> v;       ///< empty when the file has no velocities
+    std::vector<float> pscale;  ///< empty when the file has no radii
+};
+
+/// Reads the `vertex` element of a PLY file. Errors: no such file, not a PLY, no x, y, z (naming the
+/// properties it has), a truncated body, no points.
+PointCloudData readPlyPoints(const std::string& path);
+
+}  // namespace mpm
