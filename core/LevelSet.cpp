@@ -104,9 +104,10 @@ void LevelSet::Sampler::phiAndGradient(const Vec3d& x, double& phi, Vec3d& gradi
 }
 
 struct VectorField::Sampler::Impl {
-    openvdb::tools::GridSampler<openvdb::Vec3SGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler;
+    // The sampler keeps a reference to the accessor: the accessor is declared, and so built, first.
     openvdb::Vec3SGrid::ConstAccessor acc;
-    explicit Impl(const openvdb::Vec3SGrid& g) : sampler(g.getConstAccessor(), g.transform()), acc(g.getConstAccessor()) {}
+    openvdb::tools::GridSampler<openvdb::Vec3SGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler;
+    explicit Impl(const openvdb::Vec3SGrid& g) : acc(g.getConstAccessor()), sampler(acc, g.transform()) {}
 };
 
 VectorField::Sampler::Sampler(const VectorField& f) : impl_(std::make_unique<Impl>(*f.grid_->grid)) {}

@@ -159,6 +159,7 @@ TriangleMesh placed(TriangleMesh mesh, const Placement& placement) {
 
 std::shared_ptr<const VectorField> vdbVectorField(const std::string& path, const std::string& gridName) {
     openvdb::initialize();
+    if (!std::filesystem::is_regular_file(path)) throw LevelSetError(path + ": no such VDB file");
     openvdb::GridBase::Ptr base;
     try {
         openvdb::io::File file(path);

@@ -166,7 +166,8 @@ SetSamples pointCloudSet(const SceneDesc& scene, std::size_t i, const PointsShap
 
 }  // namespace
 
-SetSamples sampleSet(const SceneDesc& scene, std::size_t i) {
+/// The set's shape sampled: positions, a point cloud's velocities, the volume.
+static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i) {
     const ParticleSetDesc& d = scene.sets[i];
     if (const auto* points = std::get_if<PointsShape>(&d.shape)) return pointCloudSet(scene, i, *points);
     const SetRegionIn r = regionOf(scene, i);
@@ -177,6 +178,39 @@ SetSamples sampleSet(const SceneDesc& scene, std::size_t i) {
     if (!r.placement.identity())
         for (Vec3d& x : out.positions) x = r.placement.apply(x);
     out.volume = shapeVolume(r.region) * s * s * s;
+    return out;
+}
+
+/// The set's initial velocities beyond its constant one: a rigid spin about the pivot, and a VDB field.
+static void addInitialVelocities(const SceneDesc& scene, std::size_t i, SetSamples& out) {
+    const ParticleSetDesc& d = scene.sets[i];
+    if (d.angularVelocity.isZero() && d.velocityFile.empty()) return;
+    const std::size_t n = out.positions.size();
+    if (out.velocities.empty()) out.velocities.assign(n, Vec3f::Zero());
+    if (!d.angularVelocity.isZero()) {
+        Vec3d pivot = d.pivot;
+        if (!d.pivotGiven) {
+            pivot = Vec3d::Zero();
+            for (const Vec3d& x : out.positions) pivot += x;
+            pivot /= double(std::max<std::size_t>(n, 1));
+        }
+        for (std::size_t p = 0; p < n; ++p) out.velocities[p] += d.angularVelocity.cross(out.positions[p] - pivot).cast<float>();
+    }
+    if (!d.velocityFile.empty()) {
+        const std::string path = besideScene(scene, d.velocityFile);
+        try {
+            const auto field = vdbVectorField(path, d.velocityGrid);
+            VectorField::Sampler sample(*field);
+            for (std::size_t p = 0; p < n; ++p) out.velocities[p] += sample.value(out.positions[p]).cast<float>();
+        } catch (const LevelSetError& e) {
+            throw SceneError(scene.file + ": /sets/" + std::to_string(i) + "/velocity_field/file: " + e.what());
+        }
+    }
+}
+
+SetSamples sampleSet(const SceneDesc& scene, std::size_t i) {
+    SetSamples out = sampleSetShape(scene, i);
+    addInitialVelocities(scene, i, out);
     return out;
 }
 

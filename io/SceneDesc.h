@@ -26,6 +26,11 @@ struct ParticleSetDesc {
     AnyMaterialParams params;        ///< its parameters, overrides applied; the Lame scales below come on top
     SetShape shape;
     Vec3f velocity = Vec3f::Zero();
+    Vec3d angularVelocity = Vec3d::Zero();  ///< an initial rigid spin about the pivot [rad/s]
+    Vec3d pivot = Vec3d::Zero();
+    bool pivotGiven = false;                ///< else: the centroid of the set's particles
+    std::string velocityFile;               ///< a VDB whose vector grid adds an initial velocity field
+    std::string velocityGrid = "vel";
     double particlesPerCell = 8.0;  ///< used unless count > 0
     long long count = 0;
     Sampling sampling = Sampling::Poisson;

@@ -116,6 +116,14 @@ void setKeys(V& v, ParticleSetDesc& d) {
     v.text(Key{.name = "name", .help = "unique name (default set<i>)"}, d.name);
     v.choice(Key{.name = "material", .help = "material preset", .noun = "material"}, d.material, materialSceneNames());
     v.vec3(Key{.name = "velocity", .help = "initial velocity", .unit = "m/s"}, d.velocity);
+    v.vec3(Key{.name = "angular_velocity", .help = "initial rigid spin about the pivot, added to velocity, right-handed", .unit = "rad/s"},
+           d.angularVelocity);
+    v.vec3(Key{.name = "pivot", .help = "centre of the spin (default: the set's centroid)", .unit = "m"}, d.pivot);
+    d.pivotGiven = v.given("pivot");
+    v.object(Key{.name = "velocity_field", .help = "an initial velocity field from a VDB, added to velocity"}, [&](auto& f) {
+        f.text(Key{.name = "file", .help = "VDB file, relative to the scene file (empty: none)"}, d.velocityFile);
+        f.text(Key{.name = "grid", .help = "its vector grid (Houdini's `vel`)"}, d.velocityGrid);
+    });
     v.number(Key{.name = "particles_per_cell", .help = "sampling density in particles per dx^3", .lo = 1e-3, .hi = 1000.0},
              d.particlesPerCell);
     v.integer(Key{.name = "count", .help = "exact particle count (overrides particles_per_cell when > 0)", .lo = 0, .hi = 2e9},
