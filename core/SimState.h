@@ -34,6 +34,10 @@ struct SimState {
     int32_t nextId = 0;               ///< id of the next particle emitted
     int emittedFrame = -1;            ///< emitters' progress: the last frame whose emissions are done
     int retries = 0;                  ///< frames restarted so far (stability retries)
+    /// Continuous emitters' progress, per emitter (zero for the others): how far material has flowed through
+    /// the source surface [m], and how many layers of particles have entered.
+    std::vector<double> streamFlow;
+    std::vector<int64_t> streamLayers;
     StepBounds bounds;
     EnergyReference energy;
 

@@ -83,6 +83,9 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
 }
 
 void Simulation::restore(SimState state) {
+    if (state.streamFlow.size() != emitters_.size() || state.streamLayers.size() != emitters_.size())
+        throw std::invalid_argument("restore: the state has " + std::to_string(state.streamFlow.size()) + " emitters' progress, the simulation " +
+                                    std::to_string(emitters_.size()) + " emitters");
     if (state.species.size() != state_.species.size())
         throw std::invalid_argument("restore: the state has " + std::to_string(state.species.size()) +
                                     " species, the simulation " + std::to_string(state_.species.size()));
@@ -267,10 +270,37 @@ double Simulation::substep(double dtMax) {
     const double cflBefore = cflTimeStep();
     state_.bounds = StepBounds{std::max(g2p.maxSpeed, held.maxSpeed), g2p.minStiffnessKey};
     guard_.checkSubstep(state_, g2p, dt, settings_.dx, cflBefore, cflTimeStep());
+    emitStreams(state_.time, state_.time + dt);
     state_.time += dt;
     ++state_.substeps;
     clock.lap(phases_.other);
     return dt;
+}
+
+void Simulation::emitStreams(double t0, double t1) {
+    for (std::size_t k = 0; k < emitters_.size(); ++k) {
+        const Emitter& e = emitters_[k];
+        if (!e.continuous) continue;
+        // The part of the substep during which the source runs.
+        const double open = double(e.startFrame) / settings_.fps, close = double(e.startFrame + e.durationFrames) / settings_.fps;
+        const double during = std::min(t1, close) - std::max(t0, open);
+        if (!(during > 0.0)) continue;
+        double& flow = state_.streamFlow[k];
+        int64_t& layers = state_.streamLayers[k];
+        flow += e.stream.speed * during;
+        // Layer n stands for the slab of flow [n, n + 1) spacings: it enters as the flow passes its middle, and
+        // is by now (flow - (n + 1/2) spacing) past the surface.
+        std::vector<Vec3d> x;
+        for (; (double(layers) + 0.5) * e.stream.spacing <= flow; ++layers) {
+            const Vec3d depth = e.stream.normal * (flow - (double(layers) + 0.5) * e.stream.spacing);
+            for (const Vec3d& p : e.stream.layers[layers & 1]) x.push_back(p + depth);
+        }
+        if (x.empty()) continue;
+        // New material brings energy in from outside, as a moving collider does: count it as external work.
+        const double v2 = double(e.velocity.squaredNorm());
+        for (const Vec3d& p : x) state_.energy.work += double(e.mass) * (0.5 * v2 - settings_.gravity.dot(p));
+        addParticles(e.species, x, e.velocity, e.mass, e.volume, e.set);
+    }
 }
 
 void Simulation::runFrameSubsteps() {

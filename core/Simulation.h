@@ -49,9 +49,18 @@ struct Emitter {
     int startFrame = 0;
     int durationFrames = 1;  ///< emissions happen in [startFrame, startFrame + durationFrames)
     int pauseFrames = 0;     ///< frames skipped between two emissions
+    /// A continuous source: layers of particles entering through a surface at `speed` along `normal`, one
+    /// layer every `spacing` of flow, alternating between two staggered patterns (positions on the surface).
+    struct Stream {
+        Vec3d normal = Vec3d::UnitY();
+        double speed = 0.0, spacing = 0.0;
+        std::vector<Vec3d> layers[2];
+    };
+    bool continuous = false;
+    Stream stream;
 
     bool emitsAt(int frame) const {
-        return frame >= startFrame && frame < startFrame + durationFrames && (frame - startFrame) % (pauseFrames + 1) == 0;
+        return !continuous && frame >= startFrame && frame < startFrame + durationFrames && (frame - startFrame) % (pauseFrames + 1) == 0;
     }
 };
 
@@ -78,10 +87,16 @@ public:
     void addParticles(int species, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
                       const std::vector<Vec3f>& perParticle = {});
     void addCollider(std::unique_ptr<Collider> c) { colliders_.push_back(std::move(c)); }
-    void addEmitter(Emitter e) { emitters_.push_back(std::move(e)); }
+    void addEmitter(Emitter e) {
+        emitters_.push_back(std::move(e));
+        state_.streamFlow.push_back(0.0);
+        state_.streamLayers.push_back(0);
+    }
 
     /// Emits the particle sets due at the current frame, once.
     void emitDue();
+    /// Emits the layers of continuous sources that entered during the substep [t0, t1].
+    void emitStreams(double t0, double t1);
     /// Runs substeps to the next frame time, then emits what is due there. Returns that frame's stats.
     /// Throws SimulationError when a stability check fires and no retry is left.
     FrameStats advanceFrame();

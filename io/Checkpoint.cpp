@@ -243,6 +243,8 @@ void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const 
         out.bytes(header.data(), header.size());
         state.forEachScalar([&](const auto& v) { out.value(v); });
         out.array(state.bounds.minStiffnessKey);
+        out.array(state.streamFlow);
+        out.array(state.streamLayers);
         out.value(uint32_t(state.species.size()));
         for (const AnySpecies& s : state.species)
             std::visit(
@@ -276,6 +278,9 @@ Checkpoint readCheckpoint(const std::string& path) {
     SimState& s = c.state;
     s.forEachScalar([&](auto& x) { x = in.value<std::decay_t<decltype(x)>>(); });
     in.array(s.bounds.minStiffnessKey);
+    in.array(s.streamFlow);
+    in.array(s.streamLayers);
+    if (s.streamFlow.size() != s.streamLayers.size()) in.fail("the emitters' progress is inconsistent");
     const uint32_t species = in.value<uint32_t>();
     if (species != s.bounds.minStiffnessKey.size()) in.fail("species count and step bounds disagree");
     for (uint32_t k = 0; k < species; ++k) {

@@ -40,7 +40,7 @@ struct Checkpoint {
 };
 
 /// The current checkpoint format.
-inline constexpr int kCheckpointFormat = 1;
+inline constexpr int kCheckpointFormat = 2;  ///< 2: continuous emitters' progress
 
 /// Writes `state` atomically to path (io/AtomicFile.h). Throws WriteError.
 void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const SimState& state);

@@ -82,9 +82,10 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly) {
         const double largestCoordinate = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
         const double expected = d.count > 0 ? double(d.count) : s.volume / cell * d.particlesPerCell;
         if (d.count > 0) s.particles = d.count;
+        else if (d.continuous) s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
         else if (countExactly && expected <= kSampleUpTo) s.particles = (long long)sampleSet(scene, i).positions.size();
         else s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
-        s.emissions = emissionsWithin(d, scene.frames);
+        s.emissions = d.continuous ? 1 : emissionsWithin(d, scene.frames);  // a stream's volume is its whole flow
         double perParticle = 0.0, density = 0.0;
         visitMaterialParams(d.params, [&]<class M>(const typename M::Params& p) {
             perParticle = particleBytes<M>();

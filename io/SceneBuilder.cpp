@@ -123,8 +123,8 @@ SetRegionIn regionOf(const SceneDesc& scene, std::size_t i) {
                     throw SceneError(scene.file + ": " + where + "/file: " + besideScene(scene, shape.file) +
                                      ": encloses no volume (an inside-out mesh, or a level set with nothing inside)");
                 return {LevelSetInside(ls, volume), shape.transform};
-            } else if constexpr (std::is_same_v<S, PointsShape>) {
-                throw std::logic_error("regionOf: a point cloud is no region");
+            } else if constexpr (std::is_same_v<S, PointsShape> || std::is_same_v<S, Disc>) {
+                throw std::logic_error("regionOf: a point cloud or a disc is no region");
             } else {
                 return {SetRegion(shape), Placement{}};
             }
@@ -170,6 +170,8 @@ SetSamples pointCloudSet(const SceneDesc& scene, std::size_t i, const PointsShap
 static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i) {
     const ParticleSetDesc& d = scene.sets[i];
     if (const auto* points = std::get_if<PointsShape>(&d.shape)) return pointCloudSet(scene, i, *points);
+    if (d.continuous || std::holds_alternative<Disc>(d.shape))
+        throw std::logic_error("sampleSetShape: a continuous source is a stream (streamOf)");
     const SetRegionIn r = regionOf(scene, i);
     const double s = r.placement.scale;
     // Sampled where the file's cells are dx / scale, then placed: the same particles wherever the asset is put.
@@ -214,7 +216,53 @@ SetSamples sampleSet(const SceneDesc& scene, std::size_t i) {
     return out;
 }
 
+Emitter::Stream streamOf(const SceneDesc& scene, std::size_t i) {
+    const ParticleSetDesc& d = scene.sets[i];
+    const std::string where = scene.file + ": /sets/" + std::to_string(i);
+    const Disc* disc = std::get_if<Disc>(&d.shape);
+    if (!d.continuous)
+        throw SceneError(where + "/shape: a disc is a surface with no volume: material flows in through it with \"emission\": \"continuous\"");
+    if (!disc)
+        throw SceneError(where + "/emission: continuous emission needs a \"disc\" shape to flow through (closed shapes emit whole copies)");
+    if (!d.angularVelocity.isZero() || !d.velocityFile.empty())
+        throw SceneError(where + ": a continuous source flows at its velocity; it takes no angular_velocity or velocity_field");
+    Emitter::Stream st;
+    st.normal = disc->unitNormal();
+    st.speed = d.velocity.cast<double>().dot(st.normal);
+    if (!(st.speed > 0.0))
+        throw SceneError(where + "/velocity: a continuous source needs a velocity out through its disc (velocity . normal > 0), got " +
+                         std::to_string(st.speed) + " m/s");
+    // The particle spacing that gives the set's particles per cell; one layer per spacing of flow, each a square
+    // lattice on the disc, every other layer shifted by half a spacing both ways (a body-centred stacking).
+    st.spacing = scene.settings.dx / std::cbrt(d.particlesPerCell);
+    const Vec3d u = st.normal.unitOrthogonal(), w = st.normal.cross(u);
+    const int n = int(std::ceil(disc->radius / st.spacing)) + 1;
+    for (int layer = 0; layer < 2; ++layer) {
+        const double shift = 0.5 * layer;
+        for (int a = -n; a <= n; ++a)
+            for (int b = -n; b <= n; ++b) {
+                const double s = (a + shift) * st.spacing, t = (b + shift) * st.spacing;
+                if (s * s + t * t < disc->radius * disc->radius) st.layers[layer].push_back(disc->centre + s * u + t * w);
+            }
+    }
+    if (st.layers[0].empty() || st.layers[1].empty())
+        throw SceneError(where + "/shape/radius: the disc is narrower than one particle spacing (" + std::to_string(st.spacing) + " m)");
+    return st;
+}
+
 void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo, Vec3d& hi) {
+    if (scene.sets[i].continuous || std::holds_alternative<Disc>(scene.sets[i].shape)) {
+        // What flows in over the whole duration, and the column it would fill.
+        const ParticleSetDesc& d = scene.sets[i];
+        const Emitter::Stream st = streamOf(scene, i);
+        const double length = st.speed * double(d.durationFrames) / scene.settings.fps;
+        const Disc& disc = std::get<Disc>(d.shape);
+        volume = disc.area() * length;
+        const Vec3d r = Vec3d::Constant(disc.radius), end = disc.centre + length * st.normal;
+        lo = (disc.centre - r).cwiseMin(end - r);
+        hi = (disc.centre + r).cwiseMax(end + r);
+        return;
+    }
     if (const auto* points = std::get_if<PointsShape>(&scene.sets[i].shape)) {
         const SetSamples s = pointCloudSet(scene, i, *points);
         volume = s.volume;
@@ -259,6 +307,21 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene) {
         Emitter e;
         e.species = species;
         e.set = uint16_t(i);
+        if (d.continuous || std::holds_alternative<Disc>(d.shape)) {
+            // A stream: each particle is one spacing cube of the material.
+            e.continuous = true;
+            e.stream = streamOf(scene, i);
+            e.velocity = d.velocity;
+            // A layer carries one spacing of flow through the disc: its area times the spacing, shared by its points.
+            const double perLayer = 0.5 * double(e.stream.layers[0].size() + e.stream.layers[1].size());
+            e.volume = float(std::get<Disc>(d.shape).area() * e.stream.spacing / perLayer);
+            const float density = std::visit([](const auto& p) { return p.density; }, params);
+            e.mass = float(e.volume * density * d.massScale);
+            e.startFrame = d.startFrame;
+            e.durationFrames = d.durationFrames;
+            sim->addEmitter(std::move(e));
+            continue;
+        }
         SetSamples samples = sampleSet(scene, i);
         e.positions = std::move(samples.positions);
         if (e.positions.empty())

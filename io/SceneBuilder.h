@@ -30,6 +30,10 @@ struct SetSamples {
 };
 SetSamples sampleSet(const SceneDesc& scene, std::size_t i);
 
+/// A continuous set's stream: the layers that enter through its disc (throws SceneError for a set that cannot
+/// be one: not a disc, no velocity out through it).
+Emitter::Stream streamOf(const SceneDesc& scene, std::size_t i);
+
 /// Set `i`'s volume and its bounds in the scene, without sampling it (reads its file, if it has one).
 void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo, Vec3d& hi);
 

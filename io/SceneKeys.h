@@ -132,6 +132,13 @@ void setKeys(V& v, ParticleSetDesc& d) {
                  .help = "Bridson Poisson-disk, a jittered lattice, or a regular lattice (for validation)",
                  .noun = "sampling"},
              d.sampling, std::span<const Named<Sampling>>(kSamplings));
+    std::string emission = d.continuous ? "continuous" : "copies";
+    v.choice(Key{.name = "emission",
+                 .help = "copies: the whole shape at each emission frame; continuous: material flows in through a disc at the "
+                         "set's velocity, substep by substep, from start_frame for duration frames",
+                 .noun = "emission"},
+             emission, std::vector<std::string>{"copies", "continuous"});
+    d.continuous = emission == "continuous";
     v.integer(Key{.name = "start_frame", .help = "first emission", .lo = 0, .hi = 1e8}, d.startFrame);
     v.integer(
         Key{.name = "duration", .help = "emissions happen during [start_frame, start_frame + duration)", .lo = 1, .hi = 1e8},

@@ -9,13 +9,14 @@
 
 #include "core/shapes/Box.h"
 #include "core/shapes/Cylinder.h"
+#include "core/shapes/Disc.h"
 #include "core/shapes/FileShapes.h"
 #include "core/shapes/Plane.h"
 #include "core/shapes/Sphere.h"
 
 namespace mpm {
 
-using SetShape = std::variant<Box, Sphere, Cylinder, MeshShape, VdbShape, PointsShape>;
+using SetShape = std::variant<Box, Sphere, Cylinder, MeshShape, VdbShape, PointsShape, Disc>;
 using ColliderShape = std::variant<Plane, Sphere, Box, Cylinder, MeshShape, VdbShape>;
 
 /// The `type` names of a list's shapes, in order.
