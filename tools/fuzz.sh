@@ -1,19 +1,27 @@
 #!/usr/bin/env bash
 # Fuzzes the scene reader with libFuzzer (clang 14 from Debian) for a bounded time, starting from the
-# checked-in seed corpus. Usage: tools/fuzz.sh [SECONDS] [BUILD_DIR]   (default 60 s, build-fuzz)
+# checked-in seed corpus. Usage: tools/fuzz.sh [SECONDS] [BUILD_DIR] [RELEASE_BUILD]   (default 60 s, build-fuzz,
+# build). The reader and the budget are built here with the fuzzer and the sanitizers; what the budget calls
+# to measure file-based sets (the scene builder, level sets, the engine) is linked from the Release build's
+# libraries, which must exist (the README's test command makes them).
 # Exits non-zero on any finding (the crashing input is left in BUILD_DIR as crash-*); prints executions per
 # second, the corpus size and the findings.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
 build=${2:-build-fuzz}
+release=${3:-build}
+for lib in mpm_scene mpm_engine mpm_grid; do
+  [ -f "$release/lib$lib.a" ] || { echo "fuzz: $release/lib$lib.a is missing: build the project in $release first" >&2; exit 2; }
+done
+libs=("$release/libmpm_scene.a" "$release/libmpm_engine.a" "$release/libmpm_grid.a" -lassimp -lopenvdb -lImath-3_1 -ltbb -lpthread)
 mkdir -p "$build/corpus"
 CXX=${CXX_FUZZ:-clang++-14}
 flags=(-std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -I. -isystem /usr/include/eigen3)
 srcs=(tests/fuzz/fuzz_scene.cpp io/SceneReader.cpp io/SceneBudget.cpp io/Sampling.cpp core/Species.cpp)
 # Rebuild only when a source changed.
-if [ ! -x "$build/fuzz_scene" ] || [ -n "$(find "${srcs[@]}" io core materials sparse -newer "$build/fuzz_scene" -print -quit)" ]; then
-  "$CXX" "${flags[@]}" "${srcs[@]}" -o "$build/fuzz_scene"
+if [ ! -x "$build/fuzz_scene" ] || [ -n "$(find "${srcs[@]}" io core materials sparse "${libs[@]:0:3}" -newer "$build/fuzz_scene" -print -quit)" ]; then
+  "$CXX" "${flags[@]}" "${srcs[@]}" "${libs[@]}" -o "$build/fuzz_scene"
 fi
 cp -n tests/fuzz/corpus/* "$build/corpus/" 2>/dev/null || true
 cd "$build"
