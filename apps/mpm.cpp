@@ -18,6 +18,7 @@
 #include "io/Checkpoint.h"
 #include "io/Run.h"
 #include "io/SceneBudget.h"
+#include "io/SceneBuilder.h"
 #include "io/SceneReader.h"
 
 using namespace mpm;
@@ -132,12 +133,19 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
     return kExitOk;
 }
 
-int validate(const std::string& scenePath) {
+int validate(const std::string& scenePath, bool strict) {
     const SceneDesc scene = loadScene(scenePath);
     const SceneBudget budget = estimateBudget(scene, true);
     std::cout << scene.resolvedJson << "\n";
     std::fprintf(stderr, "%s", describeBudget(budget).c_str());
     checkBudget(scene, budget);
+    const std::vector<std::string> warnings = sceneWarnings(scene);
+    for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    if (strict && !warnings.empty()) {
+        std::fprintf(stderr, "error: %s: %zu warning%s, and --strict makes them errors\n", scenePath.c_str(), warnings.size(),
+                     warnings.size() == 1 ? "" : "s");
+        return kExitBadInput;
+    }
     std::fprintf(stderr, "%s: valid (%zu particle sets)\n", scenePath.c_str(), scene.sets.size());
     return kExitOk;
 }
@@ -164,6 +172,8 @@ int main(int argc, char** argv) {
     CLI::App* validateCmd = app.add_subcommand("validate", "check a scene, print it with every default filled in and what it will cost");
     validateCmd->add_option("scene", scenePath, "scene file (JSON)");
     validateCmd->add_flag("--explain", explain, "list every scene field, its default and allowed values");
+    bool strict = false;
+    validateCmd->add_flag("--strict", strict, "exit 2 on warnings too (a tiny set, a set inside a collider, overlapping sets)");
 
     try {
         app.parse(argc, argv);
@@ -178,7 +188,7 @@ int main(int argc, char** argv) {
                 return kExitOk;
             }
             if (scenePath.empty()) throw SceneError("validate: give a scene file, or --explain");
-            return validate(scenePath);
+            return validate(scenePath, strict);
         }
         RunOptions options;
         options.outDir = outDir;

@@ -283,6 +283,54 @@ void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo,
     }
 }
 
+std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
+    std::vector<std::string> out;
+    // Above this share of a set's particles, an overlap or a start inside a collider is worth a word.
+    constexpr double kNoticeableShare = 0.01;
+    std::vector<std::unique_ptr<Collider>> colliders;
+    for (std::size_t c = 0; c < scene.colliders.size(); ++c) colliders.push_back(colliderOf(scene, c));
+    std::vector<std::vector<Vec3d>> positions(scene.sets.size());
+    for (std::size_t i = 0; i < scene.sets.size(); ++i) {
+        const ParticleSetDesc& d = scene.sets[i];
+        if (d.continuous || std::holds_alternative<Disc>(d.shape)) continue;  // a stream enters over time
+        positions[i] = sampleSet(scene, i).positions;
+        const std::string where = scene.file + ": /sets/" + std::to_string(i);
+        const std::size_t n = positions[i].size();
+        if ((long long)n < kFewParticles)
+            out.push_back(where + ": only " + std::to_string(n) + " particles; so small a body is a few cells across (raise "
+                                                                   "particles_per_cell or use a smaller dx)");
+        const double t0 = double(d.startFrame) / scene.settings.fps;
+        for (std::size_t c = 0; c < colliders.size(); ++c) {
+            colliders[c]->prepare(t0);  // a sequence loads the frames around t0
+            std::size_t inside = 0;
+            for (const Vec3d& x : positions[i]) inside += colliders[c]->signedDistance(x, t0) < 0.0;
+            if (double(inside) > kNoticeableShare * double(n))
+                out.push_back(where + "/shape: " + std::to_string(inside) + " of " + std::to_string(n) +
+                              " particles start inside collider " + std::to_string(c) +
+                              " (they are pushed out at the first substep); move the set or the collider");
+        }
+    }
+    for (std::size_t a = 0; a < scene.sets.size(); ++a) {
+        if (positions[a].empty() || std::holds_alternative<PointsShape>(scene.sets[a].shape)) continue;
+        const SetRegionIn region = regionOf(scene, a);
+        for (std::size_t b = 0; b < scene.sets.size(); ++b) {
+            if (b == a || positions[b].empty()) continue;
+            std::size_t inside = 0;
+            for (const Vec3d& x : positions[b]) {
+                // Back into the frame a's region was sampled in.
+                const Placement& t = region.placement;
+                const Vec3d local = t.identity() ? x : Vec3d(t.rotate.matrix().transpose() * (x - t.translate) / t.scale);
+                inside += std::visit([&](const auto& r) { return r.contains(local); }, region.region);
+            }
+            if (double(inside) > kNoticeableShare * double(positions[b].size()) && scene.sets[a].startFrame == scene.sets[b].startFrame)
+                out.push_back(scene.file + ": /sets/" + std::to_string(b) + "/shape: " + std::to_string(inside) + " of " +
+                              std::to_string(positions[b].size()) + " particles lie inside set " + std::to_string(a) + " (\"" +
+                              scene.sets[a].name + "\"): both are emitted into the same space");
+        }
+    }
+    return out;
+}
+
 SpeciesLayout speciesLayout(const SceneDesc& scene) {
     SpeciesLayout out;
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {

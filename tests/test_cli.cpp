@@ -43,6 +43,13 @@ TEST(Cli, ValidateShippedScenesAndBadInput) {
     EXPECT_EQ(runMpm("run /nonexistent/scene.json").code, 2);
     EXPECT_EQ(runMpm("run").code, 2);
     EXPECT_EQ(runMpm("validate --explain").code, 0);
+    // A legal but suspicious scene: a warning and exit 0, or exit 2 with --strict.
+    const std::string tiny = sceneFile("tiny_set.json", R"({"sets":[{"material":"water","count":20,
+        "shape":{"type":"sphere","center":[0,0,0],"radius":0.05}}]})");
+    const Result warned = runMpm("validate " + tiny);
+    EXPECT_EQ(warned.code, 0);
+    EXPECT_NE(warned.output.find("warning: " + tiny + ": /sets/0: only 20 particles"), std::string::npos) << warned.output;
+    EXPECT_EQ(runMpm("validate --strict " + tiny).code, 2);
 }
 
 TEST(Cli, SceneFormatReferenceIsTheExplainOutput) {

@@ -389,3 +389,26 @@ TEST(ContinuousSource, BadStreamsAreNamedErrors) {
         }
     }
 }
+
+TEST(SceneWarnings, TinySetsSetsInCollidersAndOverlapsAreNamed) {
+    const std::string dir = tempDir("warn");
+    const std::string text = R"({"simulation": {"frames": 1, "dx": 0.02},
+        "sets": [{"name": "a", "material": "water", "shape": {"type": "box", "min": [0, 0, 0], "max": [0.2, 0.2, 0.2]}},
+                 {"name": "b", "material": "jelly", "shape": {"type": "box", "min": [0.1, 0, 0], "max": [0.3, 0.2, 0.2]}},
+                 {"name": "c", "material": "water", "count": 50, "shape": {"type": "sphere", "center": [2, 2, 2], "radius": 0.05}},
+                 {"name": "d", "material": "water", "shape": {"type": "box", "min": [1, 0, 0], "max": [1.2, 0.2, 0.2]}}],
+        "colliders": [{"type": "sphere", "center": [1.2, 0.1, 0.1], "radius": 0.1}]})";
+    const std::vector<std::string> w = sceneWarnings(parseScene(text, dir + "/scene.json"));
+    auto has = [&](const std::string& what) {
+        return std::any_of(w.begin(), w.end(), [&](const std::string& s) { return s.find(what) != std::string::npos; });
+    };
+    EXPECT_TRUE(has("scene.json: /sets/1/shape: ")) << "b overlaps a";
+    EXPECT_TRUE(has("particles lie inside set 0 (\"a\")"));
+    EXPECT_TRUE(has("/sets/2: only 50 particles"));
+    EXPECT_TRUE(has("/sets/3/shape: ")) << "d starts inside the sphere";
+    EXPECT_TRUE(has("start inside collider 0"));
+    EXPECT_EQ(w.size(), 4u);  // a in b, b in a, c tiny, d in the collider
+    // A scene that touches nothing has none.
+    EXPECT_TRUE(sceneWarnings(parseScene(R"({"sets": [{"material": "water", "shape": {"type": "box", "min": [0, 0, 0],
+        "max": [0.2, 0.2, 0.2]}}], "colliders": [{"type": "plane"}]})", dir + "/scene.json")).empty());
+}
