@@ -96,11 +96,11 @@ std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std
     return std::make_shared<const LevelSet>(holder, reach);
 }
 
-std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName, double reach,
-                                            const Placement& placement) {
+namespace {
+/// The grid `gridName` of a VDB file; errors name the file and, for a missing grid, the grids it has.
+openvdb::GridBase::Ptr readVdbGrid(const std::string& path, const std::string& gridName) {
     openvdb::initialize();
     if (!std::filesystem::is_regular_file(path)) throw LevelSetError(path + ": no such VDB file");
-    openvdb::GridBase::Ptr base;
     try {
         openvdb::io::File file(path);
         file.open();
@@ -109,11 +109,18 @@ std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::
             for (auto it = file.beginName(); it != file.endName(); ++it) names += (names.empty() ? "" : ", ") + *it;
             throw LevelSetError(path + ": no grid \"" + gridName + "\" (grids: " + (names.empty() ? "none" : names) + ")");
         }
-        base = file.readGrid(gridName);
+        openvdb::GridBase::Ptr base = file.readGrid(gridName);
         file.close();
+        return base;
     } catch (const openvdb::Exception& e) {
         throw LevelSetError(path + ": cannot read: " + e.what());
     }
+}
+}  // namespace
+
+std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName, double reach,
+                                            const Placement& placement) {
+    const openvdb::GridBase::Ptr base = readVdbGrid(path, gridName);
     auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
     if (!grid) throw LevelSetError(path + ": grid \"" + gridName + "\" holds " + base->valueType() + " values; a level set holds floats");
     if (grid->getGridClass() != openvdb::GRID_LEVEL_SET)
@@ -158,18 +165,7 @@ TriangleMesh placed(TriangleMesh mesh, const Placement& placement) {
 }
 
 std::shared_ptr<const VectorField> vdbVectorField(const std::string& path, const std::string& gridName) {
-    openvdb::initialize();
-    if (!std::filesystem::is_regular_file(path)) throw LevelSetError(path + ": no such VDB file");
-    openvdb::GridBase::Ptr base;
-    try {
-        openvdb::io::File file(path);
-        file.open();
-        if (!file.hasGrid(gridName)) throw LevelSetError(path + ": no grid \"" + gridName + "\"");
-        base = file.readGrid(gridName);
-        file.close();
-    } catch (const openvdb::Exception& e) {
-        throw LevelSetError(path + ": cannot read: " + e.what());
-    }
+    const openvdb::GridBase::Ptr base = readVdbGrid(path, gridName);
     auto grid = openvdb::gridPtrCast<openvdb::Vec3SGrid>(base);
     if (!grid) throw LevelSetError(path + ": grid \"" + gridName + "\" holds " + base->valueType() + " values; a velocity grid holds vec3s");
     auto holder = std::make_shared<VectorField::Grid>();
