@@ -50,9 +50,11 @@ int Simulation::addSpecies(AnySpecies species) {
 }
 
 void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
-                              const std::vector<Vec3f>& perParticle) {
-    if (!perParticle.empty() && perParticle.size() != x.size())
-        throw std::logic_error("addParticles: one velocity per particle, or none");
+                              const std::vector<Vec3f>& perParticle, const std::vector<float>& masses,
+                              const std::vector<float>& volumes) {
+    if ((!perParticle.empty() && perParticle.size() != x.size()) || (!masses.empty() && masses.size() != x.size()) ||
+        (!volumes.empty() && volumes.size() != x.size()))
+        throw std::logic_error("addParticles: one velocity, mass or volume per particle, or none");
     float fastest = x.empty() ? 0.0f : v.norm();
     std::visit(
         [&](auto& sp) {
@@ -66,8 +68,10 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
                 fastest = std::max(fastest, P.v[n0 + i].norm());
             }
             P.C.resize(n0 + n, Mat3f::Zero());
-            P.mass.resize(n0 + n, mass);
-            P.volume0.resize(n0 + n, volume);
+            if (masses.empty()) P.mass.resize(n0 + n, mass);
+            else P.mass.insert(P.mass.end(), masses.begin(), masses.end());
+            if (volumes.empty()) P.volume0.resize(n0 + n, volume);
+            else P.volume0.insert(P.volume0.end(), volumes.begin(), volumes.end());
             P.set.resize(n0 + n, set);
             for (std::size_t i = 0; i < n; ++i) P.id.push_back(state_.nextId++);
             // A model whose rest state depends on its parameters (sand's cone) takes them.
@@ -105,7 +109,7 @@ void Simulation::emitDue() {
     if (state_.emittedFrame == state_.frame) return;
     state_.emittedFrame = state_.frame;
     for (const Emitter& e : emitters_)
-        if (e.emitsAt(state_.frame)) addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities);
+        if (e.emitsAt(state_.frame)) addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
 }
 
 double Simulation::cflTimeStep() const {

@@ -46,6 +46,7 @@ struct Emitter {
     Vec3f velocity = Vec3f::Zero();
     std::vector<Vec3f> velocities;  ///< per particle, added to `velocity` (a point cloud's); empty: none
     float mass = 0.0f, volume = 0.0f;  ///< per particle
+    std::vector<float> masses, volumes;  ///< particle by particle (a point cloud's), instead of mass, volume; empty: none
     int startFrame = 0;
     int durationFrames = 1;  ///< emissions happen in [startFrame, startFrame + durationFrames)
     int pauseFrames = 0;     ///< frames skipped between two emissions
@@ -83,9 +84,11 @@ public:
     const SimulationSettings& settings() const { return settings_; }
     int addSpecies(AnySpecies species);
     /// Appends particles at rest state (F = I, J = 1, C = 0) and gives them fresh ids.
-    /// `perParticle`, when not empty, is added to v particle by particle.
+    /// `perParticle`, when not empty, is added to v particle by particle; `masses` and `volumes`, when not
+    /// empty, replace mass and volume particle by particle.
     void addParticles(int species, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
-                      const std::vector<Vec3f>& perParticle = {});
+                      const std::vector<Vec3f>& perParticle = {}, const std::vector<float>& masses = {},
+                      const std::vector<float>& volumes = {});
     void addCollider(std::unique_ptr<Collider> c) { colliders_.push_back(std::move(c)); }
     void addEmitter(Emitter e) {
         emitters_.push_back(std::move(e));

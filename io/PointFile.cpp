@@ -72,9 +72,9 @@ double decode(const unsigned char* p, const Scalar& t, bool swap) {
     }
 }
 
-/// Which property fills which output channel: x, y, z, vx, vy, vz, pscale (-1: none).
+/// Which property fills which output channel: x, y, z, vx, vy, vz, pscale, mass, density (-1: none).
 struct Channels {
-    int x = -1, y = -1, z = -1, vx = -1, vy = -1, vz = -1, pscale = -1;
+    int x = -1, y = -1, z = -1, vx = -1, vy = -1, vz = -1, pscale = -1, mass = -1, density = -1;
 };
 
 Channels channelsOf(const Element& e) {
@@ -89,6 +89,8 @@ Channels channelsOf(const Element& e) {
         else if (n == "vy" || n == "v.y" || n == "velocity_y") c.vy = i;
         else if (n == "vz" || n == "v.z" || n == "velocity_z") c.vz = i;
         else if (n == "pscale" || n == "radius") c.pscale = i;
+        else if (n == "mass") c.mass = i;
+        else if (n == "density") c.density = i;
     }
     return c;
 }
@@ -166,6 +168,8 @@ PointCloudData readPlyPoints(const std::string& path) {
         out.x.emplace_back(vals[std::size_t(ch.x)], vals[std::size_t(ch.y)], vals[std::size_t(ch.z)]);
         if (velocity) out.v.emplace_back(float(vals[std::size_t(ch.vx)]), float(vals[std::size_t(ch.vy)]), float(vals[std::size_t(ch.vz)]));
         if (ch.pscale >= 0) out.pscale.push_back(float(vals[std::size_t(ch.pscale)]));
+        if (ch.mass >= 0) out.mass.push_back(float(vals[std::size_t(ch.mass)]));
+        if (ch.density >= 0) out.density.push_back(float(vals[std::size_t(ch.density)]));
     };
     auto truncated = [&](const Element& e, long long i) {
         return PointFileError(path + ": the body ends in element \"" + e.name + "\" " + std::to_string(i) + " of " + std::to_string(e.count) +

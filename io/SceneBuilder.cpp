@@ -123,8 +123,8 @@ SetRegionIn regionOf(const SceneDesc& scene, std::size_t i) {
                     throw SceneError(scene.file + ": " + where + "/file: " + besideScene(scene, shape.file) +
                                      ": encloses no volume (an inside-out mesh, or a level set with nothing inside)");
                 return {LevelSetInside(ls, volume), shape.transform};
-            } else if constexpr (std::is_same_v<S, PointsShape> || std::is_same_v<S, Disc>) {
-                throw std::logic_error("regionOf: a point cloud or a disc is no region");
+            } else if constexpr (std::is_same_v<S, PointsShape> || kOutlet<S>) {
+                throw std::logic_error("regionOf: a point cloud or an outlet is no region");
             } else {
                 return {SetRegion(shape), Placement{}};
             }
@@ -152,15 +152,30 @@ SetSamples pointCloudSet(const SceneDesc& scene, std::size_t i, const PointsShap
     for (Vec3d& x : out.positions) x = t.apply(x);
     const Mat3f turn = t.rotate.matrix().cast<float>();
     for (const Vec3f& v : cloud.v) out.velocities.push_back(turn * v);
+    const double dx = scene.settings.dx, perCell = dx * dx * dx / d.particlesPerCell;
     if (!cloud.pscale.empty()) {
-        double sum = 0.0;
-        for (float r : cloud.pscale) sum += std::pow(2.0 * double(r) * t.scale, 3);
-        out.volume = sum;
-        if (!(out.volume > 0.0)) throw SceneError(scene.file + ": " + where + ": " + shape.file + ": every pscale is zero");
+        for (std::size_t p = 0; p < cloud.pscale.size(); ++p) {
+            const float r = cloud.pscale[p];
+            if (!(r > 0.0f) || !std::isfinite(r))
+                throw SceneError(scene.file + ": " + where + ": " + shape.file + ": point " + std::to_string(p) + " has pscale " +
+                                 std::to_string(r) + " (a radius must be positive and finite)");
+            out.volumes.push_back(float(std::pow(2.0 * double(r) * t.scale, 3)));
+            out.volume += double(out.volumes.back());
+        }
     } else {
-        const double dx = scene.settings.dx;
-        out.volume = double(out.positions.size()) * dx * dx * dx / d.particlesPerCell;
+        out.volume = double(out.positions.size()) * perCell;
     }
+    // A point's own mass, or its density times its volume (the set's mass_scale applies to either).
+    if (!cloud.mass.empty()) {
+        out.masses = std::move(cloud.mass);
+    } else if (!cloud.density.empty()) {
+        for (std::size_t p = 0; p < cloud.density.size(); ++p)
+            out.masses.push_back(cloud.density[p] * (out.volumes.empty() ? float(perCell) : out.volumes[p]));
+    }
+    for (std::size_t p = 0; p < out.masses.size(); ++p)
+        if (!(out.masses[p] > 0.0f) || !std::isfinite(out.masses[p]))
+            throw SceneError(scene.file + ": " + where + ": " + shape.file + ": point " + std::to_string(p) + " has mass " +
+                             std::to_string(out.masses[p]) + " kg (its mass or density must be positive and finite)");
     return out;
 }
 
@@ -170,7 +185,7 @@ SetSamples pointCloudSet(const SceneDesc& scene, std::size_t i, const PointsShap
 static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i) {
     const ParticleSetDesc& d = scene.sets[i];
     if (const auto* points = std::get_if<PointsShape>(&d.shape)) return pointCloudSet(scene, i, *points);
-    if (d.continuous || std::holds_alternative<Disc>(d.shape))
+    if (d.continuous || isOutlet(d.shape))
         throw std::logic_error("sampleSetShape: a continuous source is a stream (streamOf)");
     const SetRegionIn r = regionOf(scene, i);
     const double s = r.placement.scale;
@@ -216,51 +231,70 @@ SetSamples sampleSet(const SceneDesc& scene, std::size_t i) {
     return out;
 }
 
+namespace {
+
+/// The set's outlet (a disc or a rectangle) seen through the calls a stream needs.
+template <class F>
+auto withOutlet(const SetShape& shape, F&& f) {
+    using Result = decltype(f(Disc{}));
+    return std::visit(
+        [&]<class S>(const S& s) -> Result {
+            if constexpr (kOutlet<S>)
+                return f(s);
+            else
+                throw std::logic_error("withOutlet: not an outlet");
+        },
+        shape);
+}
+
+}  // namespace
+
 Emitter::Stream streamOf(const SceneDesc& scene, std::size_t i) {
     const ParticleSetDesc& d = scene.sets[i];
     const std::string where = scene.file + ": /sets/" + std::to_string(i);
-    const Disc* disc = std::get_if<Disc>(&d.shape);
+    const std::string type = std::visit([](const auto& s) { return std::string(s.kType); }, d.shape);
     if (!d.continuous)
-        throw SceneError(where + "/shape: a disc is a surface with no volume: material flows in through it with \"emission\": \"continuous\"");
-    if (!disc)
-        throw SceneError(where + "/emission: continuous emission needs a \"disc\" shape to flow through (closed shapes emit whole copies)");
+        throw SceneError(where + "/shape: a " + type +
+                         " is a surface with no volume: material flows in through it with \"emission\": \"continuous\"");
+    if (!isOutlet(d.shape))
+        throw SceneError(where + "/emission: continuous emission needs a \"disc\" or \"rectangle\" shape to flow through (closed "
+                                 "shapes emit whole copies)");
     if (!d.angularVelocity.isZero() || !d.velocityFile.empty())
         throw SceneError(where + ": a continuous source flows at its velocity; it takes no angular_velocity or velocity_field");
-    Emitter::Stream st;
-    st.normal = disc->unitNormal();
-    st.speed = d.velocity.cast<double>().dot(st.normal);
-    if (!(st.speed > 0.0))
-        throw SceneError(where + "/velocity: a continuous source needs a velocity out through its disc (velocity . normal > 0), got " +
-                         std::to_string(st.speed) + " m/s");
-    // The particle spacing that gives the set's particles per cell; one layer per spacing of flow, each a square
-    // lattice on the disc, every other layer shifted by half a spacing both ways (a body-centred stacking).
-    st.spacing = scene.settings.dx / std::cbrt(d.particlesPerCell);
-    const Vec3d u = st.normal.unitOrthogonal(), w = st.normal.cross(u);
-    const int n = int(std::ceil(disc->radius / st.spacing)) + 1;
-    for (int layer = 0; layer < 2; ++layer) {
-        const double shift = 0.5 * layer;
-        for (int a = -n; a <= n; ++a)
-            for (int b = -n; b <= n; ++b) {
-                const double s = (a + shift) * st.spacing, t = (b + shift) * st.spacing;
-                if (s * s + t * t < disc->radius * disc->radius) st.layers[layer].push_back(disc->centre + s * u + t * w);
-            }
-    }
-    if (st.layers[0].empty() || st.layers[1].empty())
-        throw SceneError(where + "/shape/radius: the disc is narrower than one particle spacing (" + std::to_string(st.spacing) + " m)");
-    return st;
+    return withOutlet(d.shape, [&](const auto& outlet) {
+        Emitter::Stream st;
+        st.normal = outlet.unitNormal();
+        st.speed = d.velocity.cast<double>().dot(st.normal);
+        if (!(st.speed > 0.0))
+            throw SceneError(where + "/velocity: a continuous source needs a velocity out through its " + type +
+                             " (velocity . normal > 0), got " + std::to_string(st.speed) + " m/s");
+        // The particle spacing that gives the set's particles per cell; one layer per spacing of flow, every other
+        // layer shifted by half a spacing (a body-centred stacking; the outlet lays out its layers).
+        st.spacing = scene.settings.dx / std::cbrt(d.particlesPerCell);
+        Vec3d u, w;
+        outlet.sides(u, w);
+        for (int layer = 0; layer < 2; ++layer)
+            for (const Eigen::Vector2d& p : outlet.lattice(layer, st.spacing)) st.layers[layer].push_back(outlet.centre + p[0] * u + p[1] * w);
+        if (st.layers[0].empty() || st.layers[1].empty())
+            throw SceneError(where + "/shape: the " + type + " is narrower than one particle spacing (" + std::to_string(st.spacing) +
+                             " m)");
+        return st;
+    });
 }
 
 void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo, Vec3d& hi) {
-    if (scene.sets[i].continuous || std::holds_alternative<Disc>(scene.sets[i].shape)) {
+    if (scene.sets[i].continuous || isOutlet(scene.sets[i].shape)) {
         // What flows in over the whole duration, and the column it would fill.
         const ParticleSetDesc& d = scene.sets[i];
         const Emitter::Stream st = streamOf(scene, i);
         const double length = st.speed * double(d.durationFrames) / scene.settings.fps;
-        const Disc& disc = std::get<Disc>(d.shape);
-        volume = disc.area() * length;
-        const Vec3d r = Vec3d::Constant(disc.radius), end = disc.centre + length * st.normal;
-        lo = (disc.centre - r).cwiseMin(end - r);
-        hi = (disc.centre + r).cwiseMax(end + r);
+        withOutlet(d.shape, [&](const auto& outlet) {
+            volume = outlet.area() * length;
+            const Vec3d r = Vec3d::Constant(outlet.reach()), end = outlet.centre + length * st.normal;
+            lo = (outlet.centre - r).cwiseMin(end - r);
+            hi = (outlet.centre + r).cwiseMax(end + r);
+            return 0;
+        });
         return;
     }
     if (const auto* points = std::get_if<PointsShape>(&scene.sets[i].shape)) {
@@ -292,7 +326,7 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
     std::vector<std::vector<Vec3d>> positions(scene.sets.size());
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const ParticleSetDesc& d = scene.sets[i];
-        if (d.continuous || std::holds_alternative<Disc>(d.shape)) continue;  // a stream enters over time
+        if (d.continuous || isOutlet(d.shape)) continue;  // a stream enters over time
         positions[i] = sampleSet(scene, i).positions;
         const std::string where = scene.file + ": /sets/" + std::to_string(i);
         const std::size_t n = positions[i].size();
@@ -355,14 +389,14 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene) {
         Emitter e;
         e.species = species;
         e.set = uint16_t(i);
-        if (d.continuous || std::holds_alternative<Disc>(d.shape)) {
+        if (d.continuous || isOutlet(d.shape)) {
             // A stream: each particle is one spacing cube of the material.
             e.continuous = true;
             e.stream = streamOf(scene, i);
             e.velocity = d.velocity;
             // A layer carries one spacing of flow through the disc: its area times the spacing, shared by its points.
             const double perLayer = 0.5 * double(e.stream.layers[0].size() + e.stream.layers[1].size());
-            e.volume = float(std::get<Disc>(d.shape).area() * e.stream.spacing / perLayer);
+            e.volume = float(withOutlet(d.shape, [](const auto& o) { return o.area(); }) * e.stream.spacing / perLayer);
             const float density = std::visit([](const auto& p) { return p.density; }, params);
             e.mass = float(e.volume * density * d.massScale);
             e.startFrame = d.startFrame;
@@ -380,6 +414,12 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene) {
         e.volume = float(samples.volume / double(e.positions.size()));
         const float density = std::visit([](const auto& p) { return p.density; }, params);
         e.mass = float(e.volume * density * d.massScale);
+        e.volumes = std::move(samples.volumes);
+        e.masses = std::move(samples.masses);
+        if (e.masses.empty() && !e.volumes.empty())
+            for (float v : e.volumes) e.masses.push_back(float(v * density * d.massScale));
+        else
+            for (float& m : e.masses) m = float(m * d.massScale);
         e.startFrame = d.startFrame;
         e.durationFrames = d.durationFrames;
         e.pauseFrames = d.pauseFrames;

@@ -26,7 +26,9 @@ SpeciesLayout speciesLayout(const SceneDesc& scene);
 struct SetSamples {
     std::vector<Vec3d> positions;
     std::vector<Vec3f> velocities;  ///< a point cloud's, when its file has them
-    double volume = 0.0;
+    double volume = 0.0;            ///< of the whole set
+    std::vector<float> volumes;     ///< per particle, a point cloud's with radii; empty: volume shared evenly
+    std::vector<float> masses;      ///< per particle, a point cloud's with masses or densities; empty: density x volume
 };
 SetSamples sampleSet(const SceneDesc& scene, std::size_t i);
 

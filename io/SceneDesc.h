@@ -35,7 +35,7 @@ struct ParticleSetDesc {
     long long count = 0;
     Sampling sampling = Sampling::Poisson;
     int startFrame = 0, durationFrames = 1, pauseFrames = 0;
-    bool continuous = false;  ///< material enters through the shape (a disc) during the duration, not as copies
+    bool continuous = false;  ///< material enters through the shape (a disc or rectangle) during the duration, not as copies
     double lambdaScale = 1.0, muScale = 1.0, massScale = 1.0;
     unsigned seed = 1;
 };

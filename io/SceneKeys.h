@@ -134,7 +134,7 @@ void setKeys(V& v, ParticleSetDesc& d) {
              d.sampling, std::span<const Named<Sampling>>(kSamplings));
     std::string emission = d.continuous ? "continuous" : "copies";
     v.choice(Key{.name = "emission",
-                 .help = "copies: the whole shape at each emission frame; continuous: material flows in through a disc at the "
+                 .help = "copies: the whole shape at each emission frame; continuous: material flows in through a disc or rectangle at the "
                          "set's velocity, substep by substep, from start_frame for duration frames",
                  .noun = "emission"},
              emission, std::vector<std::string>{"copies", "continuous"});

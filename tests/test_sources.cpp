@@ -239,6 +239,44 @@ TEST(PointsSource, APlyCloudGivesOneParticlePerPointWhereItIs) {
     EXPECT_NEAR(Q.mass[0], 1000.0 * kDx * kDx * kDx / 8.0, 1e-9);
 }
 
+TEST(PointsSource, EachPointKeepsItsOwnRadiusMassOrDensity) {
+    // Three points of different pscale: each particle has its own cube's volume (scaled by the transform) and
+    // the material's density; a file's mass or density replaces the material's, point by point.
+    const std::string dir = tempDir("ply_attr");
+    write(dir + "/radii.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                              "property float pscale\nend_header\n0 0 0 0.005\n1 0 0 0.01\n2 0 0 0.02\n");
+    write(dir + "/mass.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                             "property float pscale\nproperty float mass\nend_header\n0 0 0 0.005 0.25\n1 0 0 0.01 0.5\n");
+    write(dir + "/density.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                                "property float pscale\nproperty float density\nend_header\n0 0 0 0.005 500\n1 0 0 0.01 2000\n");
+    write(dir + "/zero.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                             "property float pscale\nend_header\n0 0 0 0.005\n1 0 0 0\n");
+    auto particles = [&](const std::string& shape) {
+        auto sim = buildSimulation(parseScene(sceneText(shape), dir + "/scene.json"));
+        sim->emitDue();
+        return particlesOf(sim->species()[0]);
+    };
+    const ParticleArrays R = particles(R"({"type": "points", "file": "radii.ply", "transform": {"scale": 2}})");
+    const double side[3] = {0.02, 0.04, 0.08};  // 2 pscale, doubled by the scale
+    for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(R.volume0[i], std::pow(side[i], 3), 1e-6 * std::pow(side[i], 3)) << i;
+        EXPECT_NEAR(R.mass[i], 1000.0 * std::pow(side[i], 3), 1e-6 * 1000.0 * std::pow(side[i], 3)) << i;  // water
+    }
+    const ParticleArrays M = particles(R"({"type": "points", "file": "mass.ply"})");
+    EXPECT_EQ(M.mass[0], 0.25f);
+    EXPECT_EQ(M.mass[1], 0.5f);
+    EXPECT_NEAR(M.volume0[1], 8e-6, 1e-12);
+    const ParticleArrays D = particles(R"({"type": "points", "file": "density.ply"})");
+    EXPECT_NEAR(D.mass[0], 500.0 * 1e-6, 1e-6 * 500.0 * 1e-6);
+    EXPECT_NEAR(D.mass[1], 2000.0 * 8e-6, 1e-6 * 2000.0 * 8e-6);
+    try {
+        particles(R"({"type": "points", "file": "zero.ply"})");
+        ADD_FAILURE() << "a zero pscale was accepted";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("zero.ply: point 1 has pscale 0"), std::string::npos) << e.what();
+    }
+}
+
 TEST(PointsSource, BadCloudsAreNamedErrors) {
     const std::string dir = tempDir("badply");
     write(dir + "/empty.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n");
@@ -351,6 +389,37 @@ TEST(ContinuousSource, ADiscEmitsAtItsRateWithoutGaps) {
     EXPECT_LT(gap, 2.0 * spacing);
     EXPECT_GE(z.front(), 0.0);
     EXPECT_NEAR(z.back(), 1.0 * seconds, 2.0 * spacing);
+}
+
+TEST(ContinuousSource, ARectangleEmitsAtItsRateThroughItsOutline) {
+    // A slot 0.3 m x 0.1 m facing (1, 1, 0), its width along Z: rate x time particles and mass, all of them
+    // within the slot's outline seen along the flow.
+    const std::string dir = tempDir("slot");
+    const std::string text = R"({"simulation": {"frames": 12, "dx": 0.02, "gravity": [0, 0, 0], "substeps": 3},
+        "sets": [{"material": "water", "velocity": [0.70710678, 0.70710678, 0], "emission": "continuous", "duration": 12,
+                  "shape": {"type": "rectangle", "center": [1, 2, 3], "normal": [1, 1, 0], "axis": [0, 0, 1],
+                            "width": 0.3, "height": 0.1}}]})";
+    auto sim = buildSimulation(parseScene(text, dir + "/scene.json"));
+    sim->emitDue();
+    for (int f = 0; f < 12; ++f) sim->advanceFrame();
+    const double seconds = 12.0 / 24.0, volume = 0.3 * 0.1 * 1.0 * seconds;
+    const ParticleArrays& P = particlesOf(sim->species()[0]);
+    const double expected = volume / (kDx * kDx * kDx) * 8.0;
+    EXPECT_NEAR(double(P.size()), expected, 0.02 * expected);
+    double mass = 0.0;
+    for (float m : P.mass) mass += m;
+    EXPECT_NEAR(mass, 1000.0 * volume, 0.02 * 1000.0 * volume);
+    const Vec3d centre(1, 2, 3), n = Vec3d(1, 1, 0).normalized(), u = Vec3d::UnitZ(), w = n.cross(u);
+    const double slack = 0.25 * kDx;  // the flow's own pressure spreads the jet's edge a little
+    double front = 0.0;
+    for (const Vec3d& x : P.x) {
+        const Vec3d d = x - centre;
+        EXPECT_LT(std::abs(d.dot(u)), 0.15 + slack);
+        EXPECT_LT(std::abs(d.dot(w)), 0.05 + slack);
+        EXPECT_GE(d.dot(n), -slack);
+        front = std::max(front, d.dot(n));
+    }
+    EXPECT_NEAR(front, 1.0 * seconds, kDx);
 }
 
 TEST(ContinuousSource, ResumingFromTheStateGivesTheSameStream) {

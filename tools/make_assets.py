@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Makes the assets of the shipped scenes in scenes/assets/: closed triangle meshes written as OBJ (a glass, a
-bulldozer blade, a torus) and a rock as a VDB level set (through Debian's python3-openvdb, from a noisy icosphere).
+bulldozer blade, a torus, a hopper and the sand in it) and a rock as a VDB level set (through Debian's python3-openvdb, from a noisy icosphere).
 Deterministic: the same files every run. Usage: /usr/bin/python3 tools/make_assets.py [OUT_DIR]"""
 import math
 import os
@@ -133,6 +133,56 @@ def torus(out):
     write_obj(os.path.join(out, "torus.obj"), verts, faces, "a torus, major radius 1, minor radius 0.4, file units")
 
 
+def signed_volume(verts, faces):
+    return sum(
+        (verts[a][0] * (verts[b][1] * verts[c][2] - verts[b][2] * verts[c][1]) - verts[a][1] * (verts[b][0] * verts[c][2] - verts[b][2] * verts[c][0])
+         + verts[a][2] * (verts[b][0] * verts[c][1] - verts[b][1] * verts[c][0])) / 6 for a, b, c in faces)
+
+
+def outward(verts, faces):
+    """The faces wound so that their normals point out of the solid (positive enclosed volume)."""
+    return faces if signed_volume(verts, faces) > 0 else [(a, c, b) for a, b, c in faces]
+
+
+def capped(profile, segments):
+    """A solid of revolution about +Y of an open (r, y) profile whose first and last points lie on the axis side:
+    the profile revolved, and fans at its first and last points' heights closing it at the axis."""
+    verts, faces = revolve(profile, segments, closed=False)
+    n = len(profile)
+    first, last = len(verts), len(verts) + 1
+    verts += [(0.0, profile[0][1], 0.0), (0.0, profile[-1][1], 0.0)]
+    for s in range(segments):
+        s1 = (s + 1) % segments
+        faces.append((first, s1 * n, s * n))
+        faces.append((last, s * n + n - 1, s1 * n + n - 1))
+    return verts, outward(verts, faces)
+
+
+# The hopper: a bin of inner radius 10 cm over a cone of 30 degrees from the vertical down to an outlet of radius
+# 3.5 cm at 0.3 m above the floor; walls 2 cm thick (two cells of its scene's dx, so the wall's level set has an
+# inside on the grid).
+HOPPER_OUTLET, HOPPER_BIN, HOPPER_BOTTOM, HOPPER_TOP, HOPPER_WALL = 0.035, 0.10, 0.30, 0.60, 0.02
+HOPPER_CONE_TOP = HOPPER_BOTTOM + (HOPPER_BIN - HOPPER_OUTLET) / math.tan(math.radians(30))
+
+
+def hopper(out):
+    t = HOPPER_WALL
+    outer_outlet = HOPPER_OUTLET + t / math.cos(math.radians(30))
+    outer_cone_top = HOPPER_BOTTOM + (HOPPER_BIN + t - outer_outlet) / math.tan(math.radians(30))
+    profile = [(HOPPER_OUTLET, HOPPER_BOTTOM), (outer_outlet, HOPPER_BOTTOM), (HOPPER_BIN + t, outer_cone_top),
+               (HOPPER_BIN + t, HOPPER_TOP), (HOPPER_BIN, HOPPER_TOP), (HOPPER_BIN, HOPPER_CONE_TOP)]
+    verts, faces = revolve(profile, 96)
+    faces = outward(verts, faces)
+    write_obj(os.path.join(out, "hopper.obj"), verts, faces,
+              "a hopper: bin r = 10 cm over a 30-degree cone to an outlet of r = 3.5 cm at y = 0.3 m; walls 2 cm (closed solid of its walls)")
+    # The sand it holds: the inside of the cone and the bin up to 0.52 m, 5 mm in from the walls.
+    inset, fill = 0.005, 0.52
+    profile = [(0.0, HOPPER_BOTTOM + 0.002), (HOPPER_OUTLET - inset, HOPPER_BOTTOM + 0.002), (HOPPER_BIN - inset, HOPPER_CONE_TOP + 0.003),
+               (HOPPER_BIN - inset, fill), (0.0, fill)]
+    verts, faces = capped(profile[1:-1], 96)
+    write_obj(os.path.join(out, "hopper_fill.obj"), verts, faces, "the sand in hopper.obj: its cone and bin up to y = 0.52 m, 5 mm in from the walls")
+
+
 if __name__ == "__main__":
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "scenes", "assets")
     os.makedirs(out, exist_ok=True)
@@ -140,4 +190,5 @@ if __name__ == "__main__":
     blade(out)
     rock(out)
     torus(out)
+    hopper(out)
     print("wrote", ", ".join(sorted(os.listdir(out))), "in", os.path.abspath(out))

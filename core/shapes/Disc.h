@@ -2,6 +2,7 @@
 // A flat disc, the mouth of a continuous source (a faucet, a hopper's outlet): material enters through it
 // along its normal at the set's velocity (io/SceneBuilder.cpp makes the stream; core/Simulation.h emits it).
 #include <cmath>
+#include <vector>
 
 #include "materials/Parameters.h"
 
@@ -23,6 +24,26 @@ struct Disc {
 
     double area() const { return M_PI * radius * radius; }
     Vec3d unitNormal() const { return normal.normalized(); }
+    /// Two in-plane directions, u and w = normal x u.
+    void sides(Vec3d& u, Vec3d& w) const {
+        u = unitNormal().unitOrthogonal();
+        w = unitNormal().cross(u);
+    }
+    /// The largest in-plane distance from the centre to the outline.
+    double reach() const { return radius; }
+    /// A layer of a stream's body-centred stacking, as in-plane offsets (s, t) along (u, w): the square lattice of
+    /// `spacing` inside the disc, shifted by half a spacing both ways in layer 1.
+    std::vector<Eigen::Vector2d> lattice(int layer, double spacing) const {
+        const int n = int(std::ceil(radius / spacing)) + 1;
+        const double shift = 0.5 * layer;
+        std::vector<Eigen::Vector2d> out;
+        for (int a = -n; a <= n; ++a)
+            for (int b = -n; b <= n; ++b) {
+                const double s = (a + shift) * spacing, t = (b + shift) * spacing;
+                if (s * s + t * t < radius * radius) out.emplace_back(s, t);
+            }
+        return out;
+    }
 };
 
 }  // namespace mpm

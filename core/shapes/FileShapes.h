@@ -55,7 +55,8 @@ struct VdbShape {
     }
 };
 
-/// A point cloud (PLY): each point becomes one particle, with the file's velocities and radii when it has them.
+/// A point cloud (PLY): each point becomes one particle, with the file's velocities, radii, masses and densities
+/// when it has them.
 struct PointsShape {
     static constexpr const char* kType = "points";
     std::string file;
@@ -64,8 +65,8 @@ struct PointsShape {
     template <class V>
     static void keys(V& v, PointsShape& s) {
         v.text(Key{.name = "file",
-                   .help = "PLY point cloud (ASCII or binary), relative to the scene file: x, y, z; vx, vy, vz (or v.x, ...) and "
-                           "pscale when present",
+                   .help = "PLY point cloud (ASCII or binary), relative to the scene file: x, y, z; when present vx, vy, vz (or v.x, "
+                           "...), pscale (the point's volume is (2 pscale)^3), mass or density (per point, instead of the material's)",
                    .required = true},
                s.file);
         v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"}, [&](auto& t) { Placement::keys(t, s.transform); });

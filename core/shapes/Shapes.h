@@ -12,11 +12,12 @@
 #include "core/shapes/Disc.h"
 #include "core/shapes/FileShapes.h"
 #include "core/shapes/Plane.h"
+#include "core/shapes/Rectangle.h"
 #include "core/shapes/Sphere.h"
 
 namespace mpm {
 
-using SetShape = std::variant<Box, Sphere, Cylinder, MeshShape, VdbShape, PointsShape, Disc>;
+using SetShape = std::variant<Box, Sphere, Cylinder, MeshShape, VdbShape, PointsShape, Disc, Rectangle>;
 using ColliderShape = std::variant<Plane, Sphere, Box, Cylinder, MeshShape, VdbShape>;
 
 /// The `type` names of a list's shapes, in order.
@@ -31,6 +32,13 @@ bool shapeOfType(const std::string& type, std::variant<S...>& out) {
     bool found = false;
     ((!found && type == S::kType ? (out = S{}, found = true) : false), ...);
     return found;
+}
+
+/// Whether a shape is a surface that a continuous source flows in through (an outlet), not a volume.
+template <class S>
+inline constexpr bool kOutlet = std::is_same_v<S, Disc> || std::is_same_v<S, Rectangle>;
+inline bool isOutlet(const SetShape& s) {
+    return std::visit([]<class S>(const S&) { return kOutlet<S>; }, s);
 }
 
 /// Whether a shape has a formula (analytic) or comes from a file.
