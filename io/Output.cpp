@@ -42,7 +42,9 @@ FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, co
       output_(scene.output),
       layout_(layout),
       surfaces_(surfaceGroups(scene.output.surfaceGroup, layout)),
+      attributes_(PointAttributes::of(scene.output.attributes)),
       dir_(directory) {
+    for (const ParticleSetDesc& d : scene.sets) attributes_.setColours.push_back(d.colour);
     // The surface resolves the particle spacing of the first set; the sphere radius is a multiple of it.
     const double particlesPerCell = scene.sets.empty() ? 8.0 : scene.sets.front().particlesPerCell;
     particleSpacing_ = scene.settings.dx / std::cbrt(particlesPerCell);
@@ -87,7 +89,7 @@ void FrameWriter::writeFrame(int frame, const Simulation& sim, const FrameStats&
     r.surfaces = surfaces_;
     r.materialNames = materialSceneNames();
     r.setNames = layout_.setNames;
-    const PointCloud cloud = gatherPoints(sim.species(), layout_.materialOfSpecies);
+    const PointCloud cloud = gatherPoints(sim.species(), layout_.materialOfSpecies, attributes_);
     if (o.points || o.surface || o.density || o.velocity) writeVdbFrame(r, cloud);
     if (o.ply) writePly(framePath(frame, "", ".ply"), cloud);
     lastWrite_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -35,6 +35,7 @@ private:
     OutputDesc output_;
     SpeciesLayout layout_;
     std::vector<SurfaceGroup> surfaces_;
+    PointAttributes attributes_;  ///< Cd per set and the extra attributes asked for
     double particleSpacing_ = 0.0;  ///< what the surface resolves
     std::string dir_;
     std::string csv_;

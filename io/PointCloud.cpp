@@ -1,8 +1,60 @@
 #include "io/PointCloud.h"
 
+#include <cmath>
+#include <stdexcept>
+
 namespace mpm {
 
-PointCloud gatherPoints(const std::vector<AnySpecies>& species, const std::vector<int>& materialOfSpecies) {
+PointAttributes PointAttributes::of(const std::vector<std::string>& requested) {
+    PointAttributes a;
+    for (const std::string& r : requested) {
+        if (r == "J") a.J = true;
+        else if (r == "Jp") a.Jp = true;
+        else if (r == "stress_norm") a.stressNorm = true;
+        else if (r == "F") a.F = true;
+        else throw std::invalid_argument("unknown point attribute \"" + r + "\"");
+    }
+    return a;
+}
+
+namespace {
+
+/// Appends the per-particle quantities of one species that the attributes ask for, through the model's own
+/// functions (materials/Materials.h): tau / J for the stress, and F and Jp where the model keeps them.
+template <class Sp>
+void appendMaterialAttributes(const Sp& sp, const PointAttributes& a, PointCloud& f) {
+    using M = typename Sp::Material;
+    const std::size_t n = sp.p.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        const float J = M::volumeRatio(sp.state, i);
+        f.pscale.push_back(0.5f * std::cbrt(sp.p.volume0[i] * J));
+        if (a.J) f.J.push_back(J);
+        if (a.stressNorm) f.stressNorm.push_back(M::kirchhoff(sp.params, sp.state, i).norm() / J);
+        if (a.F) {
+            if constexpr (requires { M::deformationGradient(sp.state, i); })
+                f.F.push_back(M::deformationGradient(sp.state, i));
+            else
+                f.F.push_back(std::cbrt(J) * Mat3f::Identity());
+        }
+        if (a.Jp) {
+            if constexpr (requires { M::plasticVolumeRatio(sp.state, i); })
+                f.Jp.push_back(M::plasticVolumeRatio(sp.state, i));
+            else
+                f.Jp.push_back(1.0f);
+        }
+    }
+}
+
+/// Appends [a, b) of `from` to `to` when `from` holds anything.
+template <class T>
+void appendRange(std::vector<T>& to, const std::vector<T>& from, std::size_t a, std::size_t b) {
+    if (!from.empty()) to.insert(to.end(), from.begin() + std::ptrdiff_t(a), from.begin() + std::ptrdiff_t(b));
+}
+
+}  // namespace
+
+PointCloud gatherPoints(const std::vector<AnySpecies>& species, const std::vector<int>& materialOfSpecies,
+                        const PointAttributes& attributes) {
     PointCloud f;
     std::size_t n = 0;
     for (const AnySpecies& s : species) n += particlesOf(s).size();
@@ -11,6 +63,7 @@ PointCloud gatherPoints(const std::vector<AnySpecies>& species, const std::vecto
     f.id.reserve(n);
     f.material.reserve(n);
     f.set.reserve(n);
+    f.pscale.reserve(n);
     for (std::size_t s = 0; s < species.size(); ++s) {
         const ParticleArrays& P = particlesOf(species[s]);
         f.x.insert(f.x.end(), P.x.begin(), P.x.end());
@@ -18,6 +71,9 @@ PointCloud gatherPoints(const std::vector<AnySpecies>& species, const std::vecto
         f.id.insert(f.id.end(), P.id.begin(), P.id.end());
         f.material.insert(f.material.end(), P.size(), s < materialOfSpecies.size() ? materialOfSpecies[s] : 0);
         f.set.insert(f.set.end(), P.set.begin(), P.set.end());
+        if (!attributes.setColours.empty())
+            for (uint16_t set : P.set) f.Cd.push_back(set < attributes.setColours.size() ? attributes.setColours[set] : Vec3f::Ones());
+        std::visit([&](const auto& sp) { appendMaterialAttributes(sp, attributes, f); }, species[s]);
         f.speciesStart.push_back(f.x.size());
     }
     return f;
@@ -27,11 +83,17 @@ PointCloud PointCloud::subset(const std::vector<int>& species) const {
     PointCloud out;
     for (int s : species) {
         const std::size_t a = speciesStart[s], b = speciesStart[s + 1];
-        out.x.insert(out.x.end(), x.begin() + a, x.begin() + b);
-        out.v.insert(out.v.end(), v.begin() + a, v.begin() + b);
-        out.id.insert(out.id.end(), id.begin() + a, id.begin() + b);
-        out.material.insert(out.material.end(), material.begin() + a, material.begin() + b);
-        out.set.insert(out.set.end(), set.begin() + a, set.begin() + b);
+        appendRange(out.x, x, a, b);
+        appendRange(out.v, v, a, b);
+        appendRange(out.id, id, a, b);
+        appendRange(out.material, material, a, b);
+        appendRange(out.set, set, a, b);
+        appendRange(out.pscale, pscale, a, b);
+        appendRange(out.Cd, Cd, a, b);
+        appendRange(out.J, J, a, b);
+        appendRange(out.Jp, Jp, a, b);
+        appendRange(out.stressNorm, stressNorm, a, b);
+        appendRange(out.F, F, a, b);
         out.speciesStart.push_back(out.x.size());
     }
     return out;

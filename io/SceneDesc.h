@@ -26,6 +26,7 @@ struct ParticleSetDesc {
     AnyMaterialParams params;        ///< its parameters, overrides applied; the Lame scales below come on top
     SetShape shape;
     Vec3f velocity = Vec3f::Zero();
+    Vec3f colour = Vec3f::Ones();           ///< Cd of its points (linear RGB); the material's unless given
     Vec3d angularVelocity = Vec3d::Zero();  ///< an initial rigid spin about the pivot [rad/s]
     Vec3d pivot = Vec3d::Zero();
     bool pivotGiven = false;                ///< else: the centroid of the set's particles
@@ -73,6 +74,7 @@ struct OutputDesc {
     bool ply = false;                  ///< binary PLY per frame (Blender reads it)
     double surfaceRadius = 1.0;        ///< sphere radius in particle spacings
     std::string surfaceGroup = "all";  ///< all | material | set: one surface grid per group
+    std::vector<std::string> attributes;  ///< extra point attributes (io/PointCloud.h PointAttributes::names)
     int checkpointEvery = 1;           ///< frames between checkpoints; 0 = none
     int checkpointsKept = 2;
 };

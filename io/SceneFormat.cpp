@@ -46,6 +46,9 @@ public:
     }
     void text(const Key& k, std::string& value) { row(k, value, "string"); }
     void choice(const Key& k, std::string& value, const std::vector<std::string>& allowed) { row(k, value, joinNames(allowed)); }
+    void choices(const Key& k, std::vector<std::string>& values, const std::vector<std::string>& allowed) {
+        row(k, "[" + joinNames(values) + "]", "a list of: " + joinNames(allowed));
+    }
     template <class E>
     void choice(const Key& k, E& value, std::span<const Named<E>> names) {
         std::vector<std::string> allowed;

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <string>
 
+#include "io/PointCloud.h"
 #include "io/SceneDesc.h"
 
 namespace mpm {
@@ -18,6 +19,16 @@ inline constexpr Named<Boundary> kBoundaries[] = {
     {Boundary::Sticky, "sticky"}, {Boundary::Slip, "slip"}, {Boundary::Separate, "separate"}};
 inline constexpr Named<Sampling> kSamplings[] = {
     {Sampling::Poisson, "poisson"}, {Sampling::Grid, "grid"}, {Sampling::Lattice, "lattice"}};
+
+/// The colour a set's points take unless the set gives one (linear RGB; tools/render_blender.py draws with it).
+inline Vec3f defaultColour(const std::string& material) {
+    if (material == "water") return {0.15f, 0.4f, 0.9f};
+    if (material == "jelly") return {0.85f, 0.2f, 0.25f};
+    if (material == "rubber") return {0.55f, 0.25f, 0.7f};
+    if (material == "snow") return {0.92f, 0.94f, 0.97f};
+    if (material == "sand") return {0.76f, 0.6f, 0.38f};
+    return {0.6f, 0.6f, 0.6f};
+}
 
 template <class V>
 void simulationKeys(V& v, SceneDesc& d) {
@@ -82,7 +93,7 @@ void simulationKeys(V& v, SceneDesc& d) {
 template <class V>
 void outputKeys(V& v, OutputDesc& o) {
     v.text(Key{.name = "directory", .help = "where frames go (`-o` overrides)"}, o.directory);
-    v.flag(Key{.name = "points", .help = "VDB PointDataGrid `points`: P, v, id, material, set"}, o.points);
+    v.flag(Key{.name = "points", .help = "VDB PointDataGrid `points`: P, v, id, material, set, pscale, Cd, the attributes asked for; groups material_<name>, set_<name>"}, o.points);
     v.flag(Key{.name = "surface", .help = "narrow-band level set `surface` from the particles"}, o.surface);
     v.flag(Key{.name = "density", .help = "fog volume `density` (from the surface)"}, o.density);
     v.flag(Key{.name = "velocity", .help = "vector grid `vel` (mean particle velocity per voxel)"}, o.velocity);
@@ -91,7 +102,7 @@ void outputKeys(V& v, OutputDesc& o) {
             .help =
                 "points in `<scene>_points_NNNN.vdb`, volumes in `<scene>_NNNN.vdb` (Blender and pyopenvdb cannot read points)"},
         o.splitFiles);
-    v.flag(Key{.name = "ply", .help = "binary PLY `<scene>_NNNN.ply` with x, y, z, vx, vy, vz, id (Blender imports it)"}, o.ply);
+    v.flag(Key{.name = "ply", .help = "binary PLY `<scene>_NNNN.ply`: x, y, z in double, vx, vy, vz, id, material, set, pscale, red, green, blue and the attributes asked for (Blender imports it)"}, o.ply);
     v.number(Key{.name = "surface_radius",
                  .help = "radius of the particles' spheres",
                  .lo = 0.5,
@@ -104,6 +115,12 @@ void outputKeys(V& v, OutputDesc& o) {
               o.checkpointEvery);
     v.integer(Key{.name = "checkpoints_kept", .help = "the newest checkpoints kept; older ones are removed", .lo = 1, .hi = 1000},
               o.checkpointsKept);
+    v.choices(Key{.name = "attributes",
+                  .help = "point attributes written beside P, v, id, material, set, pscale and Cd: J (volume ratio), Jp "
+                          "(plastic volume ratio), stress_norm (Cauchy stress, Frobenius norm, Pa), F (elastic deformation "
+                          "gradient, 3x3)",
+                  .noun = "point attribute"},
+              o.attributes, PointAttributes::names());
     v.choice(Key{.name = "surface_group",
                  .help = "one `surface` grid, or `surface_<material>` / `surface_<set>` per group",
                  .noun = "surface grouping"},
@@ -116,6 +133,9 @@ void setKeys(V& v, ParticleSetDesc& d) {
     v.text(Key{.name = "name", .help = "unique name (default set<i>)"}, d.name);
     v.choice(Key{.name = "material", .help = "material preset", .noun = "material"}, d.material, materialSceneNames());
     v.vec3(Key{.name = "velocity", .help = "initial velocity", .unit = "m/s"}, d.velocity);
+    if (!v.given("color")) d.colour = defaultColour(d.material);
+    v.vec3(Key{.name = "color", .help = "colour of its points (Cd, linear RGB 0..1; default: the material's)"}, d.colour);
+    v.check(d.colour.minCoeff() >= 0.0f && d.colour.maxCoeff() <= 1.0f, "color", "components must lie in 0 .. 1");
     v.vec3(Key{.name = "angular_velocity", .help = "initial rigid spin about the pivot, added to velocity, right-handed", .unit = "rad/s"},
            d.angularVelocity);
     v.vec3(Key{.name = "pivot", .help = "centre of the spin (default: the set's centroid)", .unit = "m"}, d.pivot);

@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -133,6 +134,18 @@ public:
         for (const std::string& a : allowed)
             if (a == value) return;
         fail(k.name, "unknown " + std::string(k.noun) + " \"" + value + "\"; known: " + joinNames(allowed));
+    }
+    void choices(const Key& k, std::vector<std::string>& values, const std::vector<std::string>& allowed) {
+        if (const json* j = take(k)) {
+            if (!j->is_array()) fail(k.name, "expected a list of names, got " + quoted(*j) + "; known: " + joinNames(allowed));
+            values.clear();
+            for (const json& item : *j) {
+                if (!item.is_string() || std::find(allowed.begin(), allowed.end(), item.get<std::string>()) == allowed.end())
+                    fail(k.name, "unknown " + std::string(k.noun) + " " + quoted(item) + "; known: " + joinNames(allowed));
+                if (std::find(values.begin(), values.end(), item.get<std::string>()) == values.end()) values.push_back(item.get<std::string>());
+            }
+        }
+        out_[std::string(k.name)] = values;
     }
     template <class E>
     void choice(const Key& k, E& value, std::span<const Named<E>> names) {

@@ -5,9 +5,12 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/points/PointConversion.h>
 #include <openvdb/points/PointCount.h>
+#include <openvdb/points/PointGroup.h>
 #include <openvdb/points/PointRasterizeSDF.h>
 #include <openvdb/tools/LevelSetUtil.h>
 
+#include <cctype>
+#include <map>
 #include <stdexcept>
 #include <type_traits>
 
@@ -29,6 +32,8 @@ struct ArrayView {
     static VdbT convert(const T& a) {
         if constexpr (std::is_arithmetic_v<T>)
             return VdbT(a);
+        else if constexpr (std::is_same_v<T, Mat3f>)
+            return VdbT(a(0, 0), a(0, 1), a(0, 2), a(1, 0), a(1, 1), a(1, 2), a(2, 0), a(2, 1), a(2, 2));  // row-major both
         else
             return VdbT(a[0], a[1], a[2]);
     }
@@ -47,8 +52,42 @@ void addAttribute(PointDataGrid& grid, const openvdb::tools::PointIndexGrid& ind
                                                                                                        name, view);
 }
 
-/// Points with P (16-bit fixed point, as Houdini writes them) and, when full, v, id, material and set.
-PointDataGrid::Ptr makePoints(const PointCloud& f, double voxelSize, bool full) {
+/// A point group name Houdini accepts (letters, digits and underscores) for a material or set name: other
+/// characters become underscores, and a clash with an earlier group gets the index appended.
+std::string groupName(const std::string& prefix, const std::string& name, std::size_t index, const std::map<std::string, std::string>& taken) {
+    std::string g = prefix;
+    for (char c : name) g += (std::isalnum(static_cast<unsigned char>(c)) || c == '_') ? c : '_';
+    if (taken.count(g)) g += "_" + std::to_string(index);
+    return g;
+}
+
+/// One point group per material and per set present (`material_water`, `set_<name>`), and the map from each
+/// group to the name it stands for (stored as metadata: the names themselves may hold any string).
+std::map<std::string, std::string> addGroups(PointDataGrid& grid, const openvdb::tools::PointIndexGrid& index, const PointCloud& f,
+                                             const std::vector<std::string>& materialNames, const std::vector<std::string>& setNames) {
+    std::map<std::string, std::string> groups;
+    auto add = [&](const char* prefix, const std::vector<std::string>& names, const std::vector<int32_t>& of) {
+        std::vector<bool> present(names.size(), false);
+        for (int32_t k : of)
+            if (k >= 0 && std::size_t(k) < names.size()) present[std::size_t(k)] = true;
+        for (std::size_t k = 0; k < names.size(); ++k) {
+            if (!present[k]) continue;
+            const std::string g = groupName(prefix, names[k], k, groups);
+            groups[g] = names[k];
+            std::vector<short> member(of.size());
+            for (std::size_t i = 0; i < of.size(); ++i) member[i] = of[i] == int32_t(k);
+            openvdb::points::appendGroup(grid.tree(), g);
+            openvdb::points::setGroup(grid.tree(), index.tree(), member, g);
+        }
+    };
+    add("material_", materialNames, f.material);
+    add("set_", setNames, f.set);
+    return groups;
+}
+
+/// Points with P (16-bit fixed point, as Houdini writes them) and, when full, v, id, material, set, pscale,
+/// the attributes the cloud carries and the groups.
+PointDataGrid::Ptr makePoints(const PointCloud& f, double voxelSize, const VdbFrameRequest* full) {
     const auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
     const ArrayView<openvdb::Vec3d, Vec3d> positions{f.x};
     auto index = openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(positions, *xform);
@@ -59,6 +98,14 @@ PointDataGrid::Ptr makePoints(const PointCloud& f, double voxelSize, bool full) 
         addAttribute<int32_t>(*grid, *index, "id", f.id);
         addAttribute<int32_t>(*grid, *index, "material", f.material);
         addAttribute<int32_t>(*grid, *index, "set", f.set);
+        if (!f.pscale.empty()) addAttribute<float>(*grid, *index, "pscale", f.pscale);
+        if (!f.Cd.empty()) addAttribute<openvdb::Vec3s>(*grid, *index, "Cd", f.Cd);
+        if (!f.J.empty()) addAttribute<float>(*grid, *index, "J", f.J);
+        if (!f.Jp.empty()) addAttribute<float>(*grid, *index, "Jp", f.Jp);
+        if (!f.stressNorm.empty()) addAttribute<float>(*grid, *index, "stress_norm", f.stressNorm);
+        if (!f.F.empty()) addAttribute<openvdb::math::Mat3s>(*grid, *index, "F", f.F);
+        const auto groups = addGroups(*grid, *index, f, full->materialNames, full->setNames);
+        grid->insertMeta("group_names", openvdb::StringMetadata(nlohmann::json(groups).dump()));
     }
     return grid;
 }
@@ -104,7 +151,7 @@ std::size_t writeVdbFrame(const VdbFrameRequest& r, const PointCloud& flat) {
     const std::size_t speciesCount = flat.speciesStart.size() - 1;
     openvdb::GridPtrVec volumes, pointGrids;
     if (r.points) {
-        auto points = makePoints(flat, r.pointVoxelSize, true);
+        auto points = makePoints(flat, r.pointVoxelSize, &r);
         points->setName("points");
         points->insertMeta("material_names", openvdb::StringMetadata(jsonArray(r.materialNames)));
         points->insertMeta("set_names", openvdb::StringMetadata(jsonArray(r.setNames)));
@@ -116,7 +163,7 @@ std::size_t writeVdbFrame(const VdbFrameRequest& r, const PointCloud& flat) {
             const PointCloud part = all ? PointCloud() : flat.subset(g.species);
             const PointCloud& src = all ? flat : part;
             if (src.x.empty()) continue;
-            auto pts = makePoints(src, r.pointVoxelSize, false);
+            auto pts = makePoints(src, r.pointVoxelSize, nullptr);
             auto xform = openvdb::math::Transform::createLinearTransform(r.surfaceVoxelSize);
             // Zhu and Bridson 2005 smoothed spheres: blended surfaces without a post filter (docs/output.md).
             auto sdf = openvdb::points::rasterizeSmoothSpheres(*pts, r.surfaceRadius, 2.0 * r.surfaceRadius,
@@ -155,12 +202,27 @@ PointsReadBack readVdbPoints(const std::string& path) {
     };
     out.materialNames = names("material_names");
     out.setNames = names("set_names");
+    if (const auto meta = grid->getMetadata<openvdb::StringMetadata>("group_names"))
+        out.groupNames = nlohmann::json::parse(meta->value()).get<std::map<std::string, std::string>>();
+    for (const auto& [group, name] : out.groupNames) out.groups[group];
     for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf) {
         openvdb::points::AttributeHandle<openvdb::Vec3f> P(leaf->constAttributeArray("P"));
         openvdb::points::AttributeHandle<openvdb::Vec3f> v(leaf->constAttributeArray("v"));
         openvdb::points::AttributeHandle<int32_t> id(leaf->constAttributeArray("id"));
         openvdb::points::AttributeHandle<int32_t> mat(leaf->constAttributeArray("material"));
         openvdb::points::AttributeHandle<int32_t> set(leaf->constAttributeArray("set"));
+        using FloatHandle = openvdb::points::AttributeHandle<float>;
+        auto optional = [&](const char* name) {
+            return leaf->hasAttribute(name) ? std::make_unique<FloatHandle>(leaf->constAttributeArray(name)) : nullptr;
+        };
+        const auto pscale = optional("pscale"), J = optional("J"), Jp = optional("Jp"), stress = optional("stress_norm");
+        std::unique_ptr<openvdb::points::AttributeHandle<openvdb::Vec3f>> Cd;
+        if (leaf->hasAttribute("Cd")) Cd = std::make_unique<openvdb::points::AttributeHandle<openvdb::Vec3f>>(leaf->constAttributeArray("Cd"));
+        std::unique_ptr<openvdb::points::AttributeHandle<openvdb::math::Mat3s>> F;
+        if (leaf->hasAttribute("F")) F = std::make_unique<openvdb::points::AttributeHandle<openvdb::math::Mat3s>>(leaf->constAttributeArray("F"));
+        std::vector<std::pair<std::vector<bool>*, openvdb::points::GroupHandle>> groups;
+        for (auto& [group, members] : out.groups)
+            if (leaf->attributeSet().descriptor().hasGroup(group)) groups.emplace_back(&members, leaf->groupHandle(group));
         for (auto it = leaf->beginIndexOn(); it; ++it) {
             const openvdb::Vec3d world = grid->transform().indexToWorld(P.get(*it) + it.getCoord().asVec3d());
             out.x.emplace_back(world[0], world[1], world[2]);
@@ -169,6 +231,22 @@ PointsReadBack readVdbPoints(const std::string& path) {
             out.id.push_back(id.get(*it));
             out.material.push_back(mat.get(*it));
             out.set.push_back(set.get(*it));
+            if (pscale) out.pscale.push_back(pscale->get(*it));
+            if (J) out.J.push_back(J->get(*it));
+            if (Jp) out.Jp.push_back(Jp->get(*it));
+            if (stress) out.stressNorm.push_back(stress->get(*it));
+            if (Cd) {
+                const openvdb::Vec3f c = Cd->get(*it);
+                out.Cd.emplace_back(c[0], c[1], c[2]);
+            }
+            if (F) {
+                const openvdb::math::Mat3s m = F->get(*it);
+                Mat3f e;
+                for (int r = 0; r < 3; ++r)
+                    for (int c = 0; c < 3; ++c) e(r, c) = m(r, c);
+                out.F.push_back(e);
+            }
+            for (auto& [members, handle] : groups) members->push_back(handle.get(*it));
         }
     }
     return out;

@@ -3,6 +3,7 @@
 // set), narrow-band level sets "surface" built from the particles with OpenVDB's own rasteriser, and
 // optionally a fog volume "density" and a velocity grid "vel". OpenVDB's heavy headers live only in
 // VdbWriter.cpp.
+#include <map>
 #include <string>
 #include <vector>
 
@@ -29,12 +30,18 @@ struct VdbFrameRequest {
 /// Writes the requested grids atomically. Returns the number of particles written.
 std::size_t writeVdbFrame(const VdbFrameRequest& request, const PointCloud& points);
 
-/// Reads back the "points" grid of a file: positions, velocities and ids (for tests and tools).
+/// Reads back the "points" grid of a file: positions, velocities, ids and every attribute and group there is
+/// (for tests and tools; an attribute the file lacks stays empty).
 struct PointsReadBack {
     std::vector<Vec3d> x;
     std::vector<Vec3f> v;
     std::vector<int32_t> id, material, set;
+    std::vector<float> pscale, J, Jp, stressNorm;
+    std::vector<Vec3f> Cd;
+    std::vector<Mat3f> F;
     std::vector<std::string> materialNames, setNames;  ///< from the grid's metadata
+    std::map<std::string, std::string> groupNames;      ///< point group -> the material or set name it stands for
+    std::map<std::string, std::vector<bool>> groups;    ///< point group -> membership, point by point
 };
 PointsReadBack readVdbPoints(const std::string& path);
 

@@ -60,6 +60,7 @@ struct FixedCorotated {
         return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
     }
     static float volumeRatio(const State& s, std::size_t i) { return s.F[i].determinant(); }
+    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.F[i]; }
     static float stiffnessKey(const State& s, std::size_t i) { return s.F[i].determinant(); }  // finite check; c is constant
     static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }
 };

@@ -16,6 +16,9 @@
 //     static float  volumeRatio(const State&, size_t i);                            // J, for diagnostics
 //     static float  stiffnessKey(const State&, size_t i);                           // its minimum sets ...
 //     static float  waveSpeed(const Params&, float minStiffnessKey);                // ... the fastest wave speed
+//     // optional, for output attributes (io/PointCloud.cpp; without them F = J^(1/3) I and Jp = 1):
+//     static Mat3f  deformationGradient(const State&, size_t i);                    // the elastic F the model keeps
+//     static float  plasticVolumeRatio(const State&, size_t i);                     // Jp, volume change from plasticity
 //     // optional, for n <= simd::kLanes consecutive particles (the SVD-based models run their SVDs in SIMD lanes):
 //     static void   kirchhoffBatch(const Params&, const State&, size_t first, int n, Mat3f* tau);
 //     static void   updateDeformationBatch(const Params&, State&, size_t first, int n, const Mat3f* gradV, float dt);

@@ -53,6 +53,7 @@ struct NeoHookean {
         return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
     }
     static float volumeRatio(const State& s, std::size_t i) { return s.F[i].determinant(); }
+    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.F[i]; }
     /// J itself, or NaN once the element has inverted (stops the run).
     static float stiffnessKey(const State& s, std::size_t i) {
         const float J = s.F[i].determinant();

@@ -13,6 +13,7 @@
 //     void text(const Key&, std::string& value);
 //     template <class E> void choice(const Key&, E& value, std::span<const Named<E>> names);  // an enum
 //     void choice(const Key&, std::string& value, const std::vector<std::string>& allowed);
+//     void choices(const Key&, std::vector<std::string>& values, const std::vector<std::string>& allowed);  // a list of names
 //     void check(bool ok, std::string_view key, const std::string& problem);  // a rule between keys
 //     bool given(std::string_view key);                                       // whether the scene has it
 //     template <class F> void object(const Key&, F&& f);                     // f(visitor&) inside a nested object
@@ -64,6 +65,7 @@ struct KeyVisitorArchetype {
     template <class E>
     void choice(const Key&, E&, std::span<const Named<E>>) {}
     void choice(const Key&, std::string&, const std::vector<std::string>&) {}
+    void choices(const Key&, std::vector<std::string>&, const std::vector<std::string>&) {}
     void check(bool, std::string_view, const std::string&) {}
     bool given(std::string_view) { return false; }
     template <class F> void object(const Key&, F&& f) { f(*this); }

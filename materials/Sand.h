@@ -151,6 +151,9 @@ struct Sand {
         return psi<double>(m.mu, m.lambda, s.Fe[i].cast<double>());
     }
     static float volumeRatio(const State& s, std::size_t i) { return s.Fe[i].determinant(); }
+    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.Fe[i]; }
+    /// The volume change the return mapping took out of Fe, which the volume correction keeps as log v_c.
+    static float plasticVolumeRatio(const State& s, std::size_t i) { return std::exp(s.logVc[i]); }
     static float stiffnessKey(const State& s, std::size_t i) { return s.Fe[i].determinant(); }
     static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }
 };

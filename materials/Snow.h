@@ -94,6 +94,8 @@ struct Snow {
         return FixedCorotated::psi<double>(m.mu * h, m.lambda * h, s.Fe[i].cast<double>());
     }
     static float volumeRatio(const State& s, std::size_t i) { return s.Fe[i].determinant() * s.Jp[i]; }
+    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.Fe[i]; }
+    static float plasticVolumeRatio(const State& s, std::size_t i) { return s.Jp[i]; }
     /// Hardening grows as J_P shrinks, so the smallest J_P sets the fastest wave.
     static float stiffnessKey(const State& s, std::size_t i) { return s.Jp[i]; }
     static float waveSpeed(const Params& m, float minJp) {

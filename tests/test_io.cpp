@@ -8,6 +8,7 @@
 #include <map>
 
 #include "io/AtomicFile.h"
+#include "io/PointFile.h"
 #include "io/Output.h"
 #include "io/Run.h"
 #include "io/Sampling.h"
@@ -137,6 +138,92 @@ TEST(Emission, HappensOnTheRightFrames) {
     EXPECT_EQ(b[3], 2 * b[0]);
     EXPECT_EQ(b[4], 2 * b[0]);
     EXPECT_NEAR(sim->time(), 5.0 / 24.0, 1e-12);  // substeps end exactly on frame times
+}
+
+TEST(Output, PointsCarryHoudinisAttributesAndGroups) {
+    // Water and a jelly of two names (one with characters no group name may hold): pscale, Cd (the set's colour
+    // or the material's), J, Jp, stress_norm and F as asked, a group per material and per set, and the PLY with
+    // double positions and the same attributes, read back by the engine's own point-cloud reader.
+    const std::string dir = tempDir("houdini");
+    SceneDesc scene = loadScene(writeScene(dir, "h.json", R"({
+      "simulation": { "frames": 2, "dx": 0.05, "substeps": 2 },
+      "output": { "attributes": ["J", "Jp", "stress_norm", "F"], "ply": true, "split_files": true },
+      "sets": [ { "name": "pool", "material": "water", "shape": { "type": "box", "min": [0,0,0], "max": [0.2,0.2,0.2] } },
+                { "name": "red block/1", "material": "jelly", "color": [1, 0, 0.5],
+                  "shape": { "type": "box", "min": [0.5,0,0], "max": [0.7,0.2,0.2] } } ],
+      "colliders": [ { "type": "plane" } ] })"));
+    auto sim = buildSimulation(scene);
+    sim->emitDue();
+    sim->advanceFrame();
+    FrameWriter writer(scene, speciesLayout(scene), dir + "/frames");
+    writer.writeFrame(1, *sim, sim->measure());
+    const PointsReadBack back = readVdbPoints(writer.framePath(1, "points_"));
+    const std::size_t n = back.x.size();
+    ASSERT_GT(n, 100u);
+    for (auto* a : {&back.pscale, &back.J, &back.Jp, &back.stressNorm}) ASSERT_EQ(a->size(), n);
+    ASSERT_EQ(back.Cd.size(), n);
+    ASSERT_EQ(back.F.size(), n);
+    // The truth, particle by particle from the state, by id.
+    std::map<int32_t, std::tuple<float, Mat3f, float>> truth;  // pscale, F, |sigma|
+    for (const AnySpecies& s : sim->species())
+        std::visit(
+            [&](const auto& sp) {
+                using M = typename std::decay_t<decltype(sp)>::Material;
+                for (std::size_t i = 0; i < sp.p.size(); ++i) {
+                    const float J = M::volumeRatio(sp.state, i);
+                    Mat3f F = std::cbrt(J) * Mat3f::Identity();
+                    if constexpr (requires { M::deformationGradient(sp.state, i); }) F = M::deformationGradient(sp.state, i);
+                    truth[sp.p.id[i]] = {0.5f * std::cbrt(sp.p.volume0[i] * J), F, M::kirchhoff(sp.params, sp.state, i).norm() / J};
+                }
+            },
+            s);
+    const Vec3f water(0.15f, 0.4f, 0.9f), mine(1.0f, 0.0f, 0.5f);
+    EXPECT_EQ(back.groupNames.at("material_water"), "water");
+    EXPECT_EQ(back.groupNames.at("material_jelly"), "jelly");
+    EXPECT_EQ(back.groupNames.at("set_pool"), "pool");
+    EXPECT_EQ(back.groupNames.at("set_red_block_1"), "red block/1");
+    EXPECT_EQ(back.groupNames.size(), 4u);  // the materials no set uses have no group
+    double maxStress = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto& [pscale, F, stress] = truth.at(back.id[i]);
+        const bool jelly = back.set[i] == 1;
+        EXPECT_FLOAT_EQ(back.pscale[i], pscale);
+        EXPECT_EQ(back.Cd[i], jelly ? mine : water);
+        EXPECT_TRUE(back.F[i].isApprox(F, 1e-6f));
+        EXPECT_NEAR(back.J[i], F.determinant(), 1e-5f);
+        EXPECT_EQ(back.Jp[i], 1.0f);  // neither model is plastic
+        EXPECT_NEAR(back.stressNorm[i], stress, 1e-3f * std::max(1.0f, stress));
+        maxStress = std::max(maxStress, double(stress));
+        EXPECT_EQ(back.groups.at("material_jelly")[i], jelly);
+        EXPECT_EQ(back.groups.at("set_red_block_1")[i], jelly);
+        EXPECT_EQ(back.groups.at("material_water")[i], !jelly);
+        EXPECT_EQ(back.groups.at("set_pool")[i], !jelly);
+    }
+    EXPECT_GT(maxStress, 1.0);  // a frame under gravity is stressed
+    // pscale is half the side of the particle's cube: 8 per cell at rest gives dx / 4.
+    EXPECT_NEAR(back.pscale[0], 0.05 / 4.0, 0.05 * 0.05);
+    // The PLY: the same particles with positions in double, as the state holds them.
+    const PointCloudData ply = readPlyPoints(writer.framePath(1, "", ".ply"));
+    std::map<int32_t, Vec3d> x;
+    for (const AnySpecies& s : sim->species())
+        for (std::size_t i = 0; i < particlesOf(s).size(); ++i) x[particlesOf(s).id[i]] = particlesOf(s).x[i];
+    ASSERT_EQ(ply.x.size(), x.size());
+    std::size_t k = 0;
+    for (const auto& s : sim->species())
+        for (std::size_t i = 0; i < particlesOf(s).size(); ++i, ++k) {
+            EXPECT_EQ(ply.x[k], particlesOf(s).x[i]);  // bit for bit
+            EXPECT_EQ(ply.v[k], particlesOf(s).v[i]);
+            EXPECT_FLOAT_EQ(ply.pscale[k], std::get<0>(truth.at(particlesOf(s).id[i])));
+        }
+    // A name the list does not hold is a named error.
+    std::string what;
+    try {
+        loadScene(writeScene(dir, "bad.json", R"({"output": {"attributes": ["J", "stress"]}})"));
+    } catch (const SceneError& e) {
+        what = e.what();
+    }
+    EXPECT_NE(what.find("bad.json: /output/attributes: unknown point attribute \"stress\"; known: J, Jp, stress_norm, F"), std::string::npos)
+        << what;
 }
 
 TEST(Output, FrameReadsBackWithSameParticles) {
