@@ -53,7 +53,7 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     writer_ = std::make_unique<FrameWriter>(scene_, layout_, dir_, statsSoFar_);
     if (start_ == 0) {
         const FrameStats st = sim_->measure();
-        if (options_.firstFrame == 0) writer_->writeFrame(0, *sim_, st);
+        if (options_.firstFrame == 0 && scene_.output.initialFrame) writer_->writeFrame(0, *sim_, st);
         else writer_->recordStats(st);
     }
 }

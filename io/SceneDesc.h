@@ -72,6 +72,7 @@ struct OutputDesc {
     bool velocity = false;             ///< vector grid "vel"
     bool splitFiles = false;           ///< points in <scene>_points_NNNN.vdb, volumes in <scene>_NNNN.vdb
     bool ply = false;                  ///< binary PLY per frame (Blender reads it)
+    bool initialFrame = false;         ///< also write the initial state as file 0000 (file N is the end of frame N)
     double surfaceRadius = 1.0;        ///< sphere radius in particle spacings
     std::string surfaceGroup = "all";  ///< all | material | set: one surface grid per group
     std::vector<std::string> attributes;  ///< extra point attributes (io/PointCloud.h PointAttributes::names)

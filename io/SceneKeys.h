@@ -103,6 +103,10 @@ void outputKeys(V& v, OutputDesc& o) {
                 "points in `<scene>_points_NNNN.vdb`, volumes in `<scene>_NNNN.vdb` (Blender and pyopenvdb cannot read points)"},
         o.splitFiles);
     v.flag(Key{.name = "ply", .help = "binary PLY `<scene>_NNNN.ply`: x, y, z in double, vx, vy, vz, id, material, set, pscale, red, green, blue and the attributes asked for (Blender imports it)"}, o.ply);
+    v.flag(Key{.name = "initial_frame",
+               .help = "also write the initial state as file 0000; file N holds the state at the end of frame N, from 1, "
+                       "as Blender and Houdini number frames"},
+           o.initialFrame);
     v.number(Key{.name = "surface_radius",
                  .help = "radius of the particles' spheres",
                  .lo = 0.5,

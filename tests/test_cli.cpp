@@ -70,12 +70,22 @@ TEST(Cli, RunWritesFramesAndStats) {
     const std::string out = (fs::temp_directory_path() / ("mpm_cli_out_" + std::to_string(::getpid()))).string();
     const Result r = runMpm("run " + scene + " -o " + out + " --threads 2 --quiet");
     EXPECT_EQ(r.code, 0) << r.output;
-    EXPECT_TRUE(fs::exists(out + "/tiny_0000.vdb"));
+    // File N is the end of frame N, from 1, as Blender and Houdini count; the initial state only when asked.
+    EXPECT_FALSE(fs::exists(out + "/tiny_0000.vdb"));
+    EXPECT_TRUE(fs::exists(out + "/tiny_0001.vdb"));
     EXPECT_TRUE(fs::exists(out + "/tiny_0002.vdb"));
+    EXPECT_FALSE(fs::exists(out + "/tiny_0003.vdb"));
     std::ifstream csv(out + "/stats.csv");
     int lines = 0;
     for (std::string line; std::getline(csv, line);) ++lines;
-    EXPECT_EQ(lines, 4);  // header + frames 0, 1, 2
+    EXPECT_EQ(lines, 4);  // header + frames 0 (the initial state), 1, 2
+    const std::string initial = sceneFile("tiny0.json", R"({
+      "simulation": { "frames": 1, "dx": 0.05, "substeps": 2 },
+      "output": { "surface": false, "initial_frame": true },
+      "sets": [ { "material": "water", "shape": { "type": "box", "min": [0,0,0], "max": [0.2,0.2,0.2] } } ] })");
+    EXPECT_EQ(runMpm("run " + initial + " -o " + out + "0 --quiet").code, 0);
+    EXPECT_TRUE(fs::exists(out + "0/tiny0_0000.vdb"));
+    EXPECT_TRUE(fs::exists(out + "0/tiny0_0001.vdb"));
 }
 
 TEST(Cli, UnstableRunIsCaughtNotWritten) {

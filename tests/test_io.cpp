@@ -297,6 +297,6 @@ TEST(Output, RerunRemovesOldFramesOfTheSceneOnly) {
     EXPECT_FALSE(fs::exists(dir + "/f/rr_0007.vdb.tmp12345"));  // a killed run's temporary file
     EXPECT_TRUE(fs::exists(dir + "/f/other_0007.vdb"));
     EXPECT_TRUE(fs::exists(dir + "/f/rr_break_0007.vdb"));      // a scene whose name starts with this one's
-    EXPECT_TRUE(fs::exists(dir + "/f/rr_0000.vdb"));             // the new run's initial state
+    EXPECT_FALSE(fs::exists(dir + "/f/rr_0000.vdb"));            // the initial state is not a frame unless asked for
     EXPECT_EQ(notes, 2);                                         // both removals are reported
 }

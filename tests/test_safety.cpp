@@ -249,7 +249,7 @@ TEST(Safety, FramesAToBDeleteNothingElseAndStartFromACheckpoint) {
     const Result r = runMpm({"run", scene, "-o", dir + "/out", "--frames", "14:14"}, dir);
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_NE(r.output.find("continuing from " + dir + "/out/flow_checkpoint_0013.mpmc"), std::string::npos) << r.output;
-    for (int f = 0; f <= 14; ++f) {
+    for (int f = 1; f <= 14; ++f) {
         char name[32];
         std::snprintf(name, sizeof name, "/flow_%04d.vdb", f);
         EXPECT_TRUE(fs::exists(dir + "/out" + name)) << name;  // nothing before 14 deleted
@@ -264,7 +264,7 @@ TEST(Safety, OneRunPerDirectoryAndNoOtherScenesFramesRemoved) {
     for (const char* name : {"dam_break_0004.vdb", "dam_break_points_0004.vdb", "dam_break_checkpoint_0004.mpmc"})
         writeFile(dir + "/out/" + name, "another scene's frame");
     Child first = start({"run", scene, "-o", dir + "/out", "--quiet"}, dir + "/first.log");
-    while (!fs::exists(dir + "/out/dam_0000.vdb")) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    while (!fs::exists(dir + "/out/dam_0001.vdb")) std::this_thread::sleep_for(std::chrono::milliseconds(5));
     const Result second = runMpm({"run", scene, "-o", dir + "/out"}, dir);
     EXPECT_EQ(second.code, 2);
     EXPECT_NE(second.output.find("in use by another run (pid " + std::to_string(first.pid)), std::string::npos) << second.output;

@@ -1,7 +1,7 @@
 """Headless Blender render of mpm's output, with the scene's colliders (Debian's Blender 3.4).
 
     blender -b --factory-startup --python-exit-code 1 -P tools/render_blender.py -- \
-        --vdb out/dam_break/dam_break_0012.vdb --out dam.png [--frames 0:48] [options]
+        --vdb out/dam_break/dam_break_0012.vdb --out dam.png [--frames 1:48] [options]
 
 Imports the frame's .vdb as a Volume and meshes every surface grid in it (`surface`, or `surface_<material>`
 / `surface_<set>` with output.surface_group) with a Volume to Mesh modifier at threshold 0, the zero
