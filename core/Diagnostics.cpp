@@ -87,17 +87,25 @@ FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, f
 std::string FrameStats::csvHeader() {
     return "frame,time,particles,mass,momentum_x,momentum_y,momentum_z,angular_momentum_x,angular_momentum_y,"
            "angular_momentum_z,kinetic_energy,elastic_energy,gravity_energy,max_speed,min_J,max_J,active_leaves,grid_bytes,"
-           "substeps,retries,wall_seconds";
+           "substeps,retries,step_dt,step_limit,wall_seconds";
 }
 
 std::string FrameStats::csvRow() const {
-    char buf[1024];
-    std::snprintf(buf, sizeof(buf),
-                  "%d,%.9g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%zu,%zu,%d,%d,%.6f", frame, time,
-                  particles, mass, momentum[0], momentum[1], momentum[2], angularMomentum[0], angularMomentum[1],
+    char buf[1024], dt[32], wall[32];
+    std::snprintf(buf, sizeof(buf), "%d,%.9g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%zu,%zu,%d,%d,",
+                  frame, time, particles, mass, momentum[0], momentum[1], momentum[2], angularMomentum[0], angularMomentum[1],
                   angularMomentum[2], kineticEnergy, elasticEnergy, gravityEnergy, maxSpeed, minJ, maxJ, activeLeaves, gridBytes,
-                  substeps, retries, wallSeconds);
-    return buf;
+                  substeps, retries);
+    std::snprintf(dt, sizeof(dt), "%.9g,", stepDt);
+    std::snprintf(wall, sizeof(wall), ",%.6f", wallSeconds);
+    // The limit names a species, which may hold any character: quoted as CSV quotes (RFC 4180) when it must be.
+    std::string limit = stepLimit;
+    if (limit.find_first_of(",\"\n\r") != std::string::npos) {
+        std::string q = "\"";
+        for (char c : limit) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+        limit = q + "\"";
+    }
+    return std::string(buf) + dt + limit + wall;
 }
 
 }  // namespace mpm

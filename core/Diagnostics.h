@@ -24,6 +24,11 @@ struct FrameStats {
     std::size_t gridBytes = 0;  ///< the grid's leaves and per-leaf tables (SparseGrid::contentBytes)
     int substeps = 0;
     int retries = 0;  ///< times this frame was restarted with half the time step
+    /// What set the step at the frame's last substep: its bound dt [s] (before the frame is cut into equal
+    /// substeps) and the rule: "target", "cfl_wave_speed <species>", "cfl_particle_speed" or "max_displacement",
+    /// with " (retry)" when a retry shortened it.
+    double stepDt = 0.0;
+    std::string stepLimit;
     double wallSeconds = 0.0;
 
     /// Kinetic + stored + gravitational: without external work and dissipation it is constant.

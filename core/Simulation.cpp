@@ -136,9 +136,10 @@ double Simulation::cflTimeStep() const {
 Simulation::StepBound Simulation::stepBound() const {
     const double target = settings_.targetDt(), cfl = cflTimeStep() * guard_.stepScale();
     std::ostringstream cause;
+    const std::string retry = guard_.stepScale() < 1.0 ? " (retry)" : "";
     if (target <= cfl) {
         cause << "the target step 1 / (fps * substeps)";
-        return {target, cause.str()};
+        return {target, cause.str(), "target" + retry};
     }
     // The fastest wave of the species present, against the fastest particle.
     float c = 0.0f;
@@ -152,10 +153,11 @@ Simulation::StepBound Simulation::stepBound() const {
             },
             state_.species[s]);
     cause << "the CFL bound, C dx / (c + |v|max + |g| dt) with ";
-    if (c >= state_.bounds.maxSpeed) cause << "the wave speed c = " << c << " m/s of species " << stiffest;
+    const bool wave = c >= state_.bounds.maxSpeed;
+    if (wave) cause << "the wave speed c = " << c << " m/s of species " << stiffest;
     else cause << "the fastest particle, |v| = " << state_.bounds.maxSpeed << " m/s";
     if (guard_.stepScale() < 1.0) cause << ", shortened " << 1.0 / guard_.stepScale() << "x for a retry";
-    return {cfl, cause.str()};
+    return {cfl, cause.str(), (wave ? "cfl_wave_speed " + stiffest : std::string("cfl_particle_speed")) + retry};
 }
 
 void Simulation::checkCoordinates() const {
@@ -177,6 +179,21 @@ void Simulation::checkCoordinates() const {
             << limit << " m (2^30 cells of dx = " << settings_.dx << " m); keep the scene nearer the origin or use a larger dx";
         throw LimitExceeded(msg.str());
     }
+}
+
+void Simulation::setVelocities(const std::vector<Vec3f>& v) {
+    if (v.size() != particleCount()) throw std::invalid_argument("setVelocities: one velocity per particle");
+    std::size_t k = 0;
+    double added = 0.0;
+    for (AnySpecies& s : state_.species) {
+        ParticleArrays& P = particlesOf(s);
+        for (std::size_t i = 0; i < P.size(); ++i, ++k) {
+            added += 0.5 * double(P.mass[i]) * (double(v[k].squaredNorm()) - double(P.v[i].squaredNorm()));
+            P.v[i] = v[k];
+        }
+    }
+    state_.energy.work += added;
+    refreshSpeedBound();
 }
 
 void Simulation::refreshSpeedBound() {
@@ -326,7 +343,12 @@ void Simulation::runFrameSubsteps() {
             throw LimitExceeded(msg.str());
         }
         const double dt = remaining / pieces;
+        // What sets this step, kept for the frame's stats (the last substep's is the frame's; a retry redoes it).
+        StepBound bound = stepBound();
+        bound.dt = dtMax;
         const double taken = substep(dt);
+        if (taken < dt) bound.dt = taken, bound.limit = "max_displacement";
+        lastBound_ = std::move(bound);
         ++state_.frameSubsteps;
         if (guard_.energyCheckDue(state_.substeps)) guard_.checkEnergy(state_, measure());
         if (pieces == 1.0 && taken == dt) state_.time = frameEnd;
@@ -357,6 +379,8 @@ FrameStats Simulation::advanceFrame() {
     st.frame = state_.frame;
     st.substeps = steps;
     st.retries = retries;
+    st.stepDt = lastBound_.dt;
+    st.stepLimit = lastBound_.limit;
     st.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return st;
 }

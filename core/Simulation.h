@@ -116,10 +116,15 @@ public:
     struct StepBound {
         double dt;
         std::string cause;
+        std::string limit;  ///< the rule in short, as stats.csv's step_limit writes it (FrameStats::stepLimit)
     };
     StepBound stepBound() const;
     /// Call after writing particle velocities directly, so that the next CFL step sees them.
     void refreshSpeedBound();
+    /// Replaces every particle's velocity (species after species, in storage order), as a user's script does
+    /// between frames: the kinetic energy it adds or removes is booked as external work, so the energy check
+    /// holds, and the CFL bound sees the new speeds.
+    void setVelocities(const std::vector<Vec3f>& v);
     FrameStats measure() const;
 
     /// Where the run is, whole (checkpoints write it; see core/SimState.h).
@@ -143,6 +148,7 @@ public:
 
 private:
     void runFrameSubsteps();
+    StepBound lastBound_{0.0, "", ""};  ///< what set the latest substep's step (stats only, not state)
     void checkCoordinates() const;
     void bin();
     GridUpdateResult updateGrid(float dt);

@@ -607,4 +607,5 @@ def main():
         render_one(vdb, f, out, args, scene, bounds)
 
 
-main()
+if __name__ == "__main__":  # tools/blender_import.py imports the collider and volume helpers
+    main()

@@ -1,0 +1,131 @@
+"""Tests of the Python module sparse_mpm (python/sparse_mpm.cpp), run by CTest with the build directory on
+PYTHONPATH: frames read into numpy arrays, a scene advanced frame by frame with its particles at hand, and
+`run` writing the frames `mpm run` writes."""
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import numpy as np
+
+import sparse_mpm
+
+FREE_BALL = {
+    "simulation": {"frames": 4, "dx": 0.05, "substeps": 2, "gravity": [0, 0, 0]},
+    "output": {"surface": False, "attributes": ["J", "Jp", "stress_norm", "F"]},
+    "sets": [{"name": "ball", "material": "jelly", "shape": {"type": "sphere", "center": [0, 0, 0], "radius": 0.2}},
+             {"name": "drop", "material": "water", "shape": {"type": "box", "min": [1, 0, 0], "max": [1.2, 0.2, 0.2]}}],
+}
+
+
+def scene_file(directory, name, scene):
+    path = os.path.join(directory, name)
+    with open(path, "w") as f:
+        json.dump(scene, f)
+    return path
+
+
+class SimulationTest(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="sparse_mpm_py_")
+        self.scene = scene_file(self.dir, "free.json", FREE_BALL)
+
+    def test_particles_are_numpy_arrays_with_every_attribute(self):
+        sim = sparse_mpm.Simulation(self.scene, threads=2)
+        p = sim.particles()
+        n = len(p["id"])
+        self.assertGreater(n, 500)
+        self.assertEqual(p["P"].dtype, np.float64)
+        self.assertEqual(p["P"].shape, (n, 3))
+        self.assertEqual(p["v"].dtype, np.float32)
+        self.assertEqual(p["F"].shape, (n, 3, 3))
+        for key in ("id", "material", "set", "pscale", "Cd", "J", "Jp", "stress_norm"):
+            self.assertEqual(len(p[key]), n, key)
+        # At rest: F = I, J = 1, no stress; ids 0..n-1; the sets' names.
+        np.testing.assert_allclose(p["F"], np.broadcast_to(np.eye(3, dtype=np.float32), (n, 3, 3)))
+        np.testing.assert_array_equal(np.sort(p["id"]), np.arange(n))
+        self.assertEqual(sim.set_names, ["ball", "drop"])
+        self.assertEqual(float(np.abs(p["stress_norm"]).max()), 0.0)
+
+    def test_a_velocity_set_from_python_carries_the_bodies_as_momentum_says(self):
+        # No gravity, no collider: bodies given one velocity move rigidly by v t, and momentum is M v throughout.
+        sim = sparse_mpm.Simulation(self.scene, threads=2)
+        before = sim.particles()
+        start = before["P"][np.argsort(before["id"])]  # the engine reorders particles by leaf: compare by id
+        n = len(start)
+        v = np.tile(np.array([1.0, 0.5, 0.0], dtype=np.float32), (n, 1))
+        sim.set_velocities(v)
+        mass = sim.stats()["mass"]
+        np.testing.assert_allclose(sim.stats()["momentum"], [mass * 1.0, mass * 0.5, 0.0], rtol=1e-6, atol=1e-9)
+        stats = sim.advance(3)
+        self.assertEqual(sim.frame, 3)
+        self.assertAlmostEqual(sim.time, 3 / 24.0, places=12)
+        np.testing.assert_allclose(stats["momentum"], [mass * 1.0, mass * 0.5, 0.0], rtol=1e-5, atol=1e-7)
+        after = sim.particles()
+        moved = after["P"][np.argsort(after["id"])] - start
+        np.testing.assert_allclose(moved, np.tile([1.0 * sim.time, 0.5 * sim.time, 0.0], (n, 1)), atol=1e-5)
+        with self.assertRaises(ValueError):
+            sim.set_velocities(np.zeros((n + 1, 3), dtype=np.float32))
+
+    def test_run_writes_frames_that_read_back_as_the_state(self):
+        out = os.path.join(self.dir, "out")
+        self.assertEqual(sparse_mpm.run(self.scene, out, threads=2), out)
+        files = sorted(f for f in os.listdir(out) if f.startswith("free_") and f.endswith(".vdb"))
+        self.assertEqual(files, ["free_%04d.vdb" % f for f in range(1, 5)])  # frames 1..4, no initial state
+        frame = sparse_mpm.read_frame(os.path.join(out, "free_0004.vdb"))
+        sim = sparse_mpm.Simulation(self.scene, threads=1)
+        sim.advance(4)
+        state = sim.particles()
+        order = np.argsort(frame["id"])
+        by_id = np.argsort(state["id"])
+        # The same run (any thread count gives the same bits); P within the 16-bit fixed point of a voxel.
+        np.testing.assert_array_equal(frame["id"][order], state["id"][by_id])
+        self.assertLess(np.abs(frame["P"][order] - state["P"][by_id]).max(), 0.05 / 65536 * 2 + 1e-9)
+        np.testing.assert_array_equal(frame["v"][order], state["v"][by_id])
+        np.testing.assert_array_equal(frame["F"][order], state["F"][by_id])
+        names = sparse_mpm.read_frame_names(os.path.join(out, "free_0004.vdb"))
+        self.assertEqual(names["set_names"], ["ball", "drop"])
+        self.assertEqual(names["groups"]["material_jelly"], "jelly")
+        np.testing.assert_array_equal(names["group_members"]["set_drop"], frame["set"] == 1)
+        np.testing.assert_array_equal(names["group_members"]["material_water"],
+                                      frame["material"] == names["material_names"].index("water"))
+
+    def test_stats_say_what_set_the_step_and_plot(self):
+        # A stiff jelly at rest, no gravity: the CFL bound from its wave speed sets every step, and a frame of
+        # 1/24 s takes as many substeps as that bound fits.
+        out = os.path.join(self.dir, "plotted")
+        sparse_mpm.run(self.scene, out, threads=2)
+        with open(os.path.join(out, "stats.csv"), newline="") as f:
+            rows = [r for r in csv.DictReader(f) if int(r["frame"]) > 0]
+        self.assertEqual(len(rows), 4)
+        for r in rows:
+            self.assertEqual(r["step_limit"], "cfl_wave_speed ball")
+            fits = (1 / 24.0) / float(r["step_dt"])
+            self.assertEqual(int(r["substeps"]), math.ceil(fits - 1e-9), r)
+        tool = os.path.join(os.path.dirname(__file__), "..", "tools", "plot_stats.py")
+        done = subprocess.run([sys.executable, tool, out], capture_output=True, text=True)
+        self.assertEqual(done.returncode, 0, done.stderr)
+        import matplotlib.image
+        for name in ("energy", "momentum", "particles", "substeps"):
+            image = matplotlib.image.imread(os.path.join(out, name + ".png"))
+            self.assertGreaterEqual(image.shape[0], 400, name)
+            self.assertGreater(float(image[..., :3].std()), 0.01, name)  # something is drawn
+        nowhere = subprocess.run([sys.executable, tool, self.dir + "/none"], capture_output=True, text=True)
+        self.assertEqual(nowhere.returncode, 2)
+        self.assertIn("no stats.csv", nowhere.stderr)
+
+    def test_a_bad_scene_is_a_named_error(self):
+        bad = scene_file(self.dir, "bad.json", {"sets": [{"material": "wter"}]})
+        with self.assertRaises(ValueError) as caught:
+            sparse_mpm.Simulation(bad)
+        self.assertIn("bad.json: /sets/0/material: unknown material \"wter\"", str(caught.exception))
+        with self.assertRaises(Exception):
+            sparse_mpm.read_frame(os.path.join(self.dir, "missing.vdb"))
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
