@@ -165,7 +165,7 @@ std::size_t writeVdbFrame(const VdbFrameRequest& r, const PointCloud& flat) {
             if (src.x.empty()) continue;
             auto pts = makePoints(src, r.pointVoxelSize, nullptr);
             auto xform = openvdb::math::Transform::createLinearTransform(r.surfaceVoxelSize);
-            // Zhu and Bridson 2005 smoothed spheres: blended surfaces without a post filter (docs/output.md).
+            // Zhu and Bridson 2005 smoothed spheres: blended surfaces without a post filter (docs/method.md, section 12).
             auto sdf = openvdb::points::rasterizeSmoothSpheres(*pts, r.surfaceRadius, 2.0 * r.surfaceRadius,
                                                                openvdb::LEVEL_SET_HALF_WIDTH, xform);
             sdf->setGridClass(openvdb::GRID_LEVEL_SET);

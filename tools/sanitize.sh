@@ -4,9 +4,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-asan}
-# The Python module is not built here (a sanitized module would need the sanitizer runtime preloaded into
-# python3); its tests run in the Release suite. -O1 -g1: line numbers in reports at a fraction of the compile time full debug information costs with
-# OpenVDB's templates.
+# -O1 -g1: line numbers in reports at a fraction of the compile time full debug information costs with
+# OpenVDB's templates. No Python module here: a sanitized module needs the sanitizer runtime preloaded into
+# python3; its tests run in the Release suite.
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Sanitize -DMPM_BUILD_BENCH=OFF -DMPM_BUILD_PYTHON=OFF -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -g1" \
   -DCMAKE_CXX_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer" >/dev/null
 # Only what the unit suite runs: the engine, the CLI and the test programs (not the report tools).
