@@ -30,6 +30,7 @@
 #include "core/LevelSetGeometry.h"
 #include "core/RigidCollider.h"
 #include "io/LevelSets.h"
+#include "io/SceneDesc.h"
 #include "io/VdbWriter.h"
 
 using namespace mpm;
@@ -154,11 +155,19 @@ std::vector<std::string> measureOutput(const Options& o) {
     const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("mpm_bench_output_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     std::vector<std::string> rows;
-    for (const char* what : {"points", "surface"}) {
+    // The surface raw and closed and smoothed as a scene's defaults ask (output.surface_dilate/smooth/erode):
+    // the filter's cost per particle is the ratio of the two rows.
+    const OutputDesc defaults;
+    for (const std::string what : {"points", "surface", "surface_filtered"}) {
         VdbFrameRequest r;
-        r.volumePath = (dir / (std::string(what) + ".vdb")).string();
-        r.points = std::string(what) == "points";
+        r.volumePath = (dir / (what + ".vdb")).string();
+        r.points = what == "points";
         r.surface = !r.points;
+        if (what == "surface_filtered") {
+            r.surfaceDilate = defaults.surfaceDilate;
+            r.surfaceSmooth = defaults.surfaceSmooth;
+            r.surfaceErode = defaults.surfaceErode;
+        }
         r.pointVoxelSize = kDx;
         r.surfaceVoxelSize = 0.5 * kDx;  // the particle spacing at 8 per cell
         r.surfaceRadius = 0.5 * kDx;

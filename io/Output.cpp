@@ -86,6 +86,9 @@ void FrameWriter::writeFrame(int frame, const Simulation& sim, const FrameStats&
     r.pointVoxelSize = sim.settings().dx;
     r.surfaceVoxelSize = particleSpacing_;
     r.surfaceRadius = o.surfaceRadius * particleSpacing_;
+    r.surfaceDilate = o.surfaceDilate;  // voxels: the surface voxel is the particle spacing
+    r.surfaceErode = o.surfaceErode;
+    r.surfaceSmooth = o.surfaceSmooth;
     r.surfaces = surfaces_;
     r.materialNames = materialSceneNames();
     r.setNames = layout_.setNames;

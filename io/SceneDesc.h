@@ -74,6 +74,10 @@ struct OutputDesc {
     bool ply = false;                  ///< binary PLY per frame (Blender reads it)
     bool initialFrame = false;         ///< also write the initial state as file 0000 (file N is the end of frame N)
     double surfaceRadius = 1.0;        ///< sphere radius in particle spacings
+    /// Closing of the surface, in particle spacings (voxels), and Gaussian passes between; the defaults are
+    /// measured in tests/test_surface.cpp (no hole in a disordered bulk, a flat pool, a ball's area, thin sheets).
+    double surfaceDilate = 2.0, surfaceErode = 2.0;
+    int surfaceSmooth = 1;
     std::string surfaceGroup = "all";  ///< all | material | set: one surface grid per group
     std::vector<std::string> attributes;  ///< extra point attributes (io/PointCloud.h PointAttributes::names)
     int checkpointEvery = 1;           ///< frames between checkpoints; 0 = none

@@ -113,6 +113,15 @@ void outputKeys(V& v, OutputDesc& o) {
                  .hi = 10.0,
                  .unit = "particle spacings"},
              o.surfaceRadius);
+    v.number(Key{.name = "surface_dilate",
+                 .help = "grow each surface outward by this much before smoothing (fills gaps between particles)",
+                 .lo = 0.0, .hi = 3.0, .unit = "particle spacings"},
+             o.surfaceDilate);
+    v.integer(Key{.name = "surface_smooth", .help = "Gaussian smoothing passes after dilating", .lo = 0, .hi = 20}, o.surfaceSmooth);
+    v.number(Key{.name = "surface_erode",
+                 .help = "shrink each surface inward by this much after smoothing (back to the material)",
+                 .lo = 0.0, .hi = 3.0, .unit = "particle spacings"},
+             o.surfaceErode);
     v.integer(Key{.name = "checkpoint_every",
                   .help = "write the whole simulation state every this many frames (`--resume` continues from it); 0 = never",
                   .lo = 0, .hi = 1e9},

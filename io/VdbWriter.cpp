@@ -7,6 +7,7 @@
 #include <openvdb/points/PointCount.h>
 #include <openvdb/points/PointGroup.h>
 #include <openvdb/points/PointRasterizeSDF.h>
+#include <openvdb/tools/LevelSetFilter.h>
 #include <openvdb/tools/LevelSetUtil.h>
 
 #include <cctype>
@@ -126,6 +127,18 @@ void writeFile(const std::string& path, const openvdb::GridPtrVec& grids) {
     });
 }
 
+/// Closes and smooths a surface as Houdini's particle-fluid surfacing does: dilate (fills the gaps between the
+/// spheres in the bulk), Gaussian passes (flatten the bumps each sphere leaves), erode (back to where the material
+/// is). The filter keeps the narrow band a signed distance as it moves the surface (its level-set tracker).
+void filterSurface(openvdb::FloatGrid& sdf, const VdbFrameRequest& r) {
+    if (r.surfaceDilate <= 0.0 && r.surfaceErode <= 0.0 && r.surfaceSmooth <= 0) return;
+    openvdb::tools::LevelSetFilter<openvdb::FloatGrid> filter(sdf);
+    const float voxel = float(sdf.voxelSize()[0]);
+    if (r.surfaceDilate > 0.0) filter.offset(-float(r.surfaceDilate) * voxel);  // phi + offset: negative grows
+    for (int i = 0; i < r.surfaceSmooth; ++i) filter.gaussian(1);
+    if (r.surfaceErode > 0.0) filter.offset(float(r.surfaceErode) * voxel);
+}
+
 /// Mean particle velocity per surface voxel.
 openvdb::Vec3SGrid::Ptr velocityGrid(const PointCloud& f, double voxelSize) {
     auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
@@ -165,10 +178,11 @@ std::size_t writeVdbFrame(const VdbFrameRequest& r, const PointCloud& flat) {
             if (src.x.empty()) continue;
             auto pts = makePoints(src, r.pointVoxelSize, nullptr);
             auto xform = openvdb::math::Transform::createLinearTransform(r.surfaceVoxelSize);
-            // Zhu and Bridson 2005 smoothed spheres: blended surfaces without a post filter (docs/method.md, section 12).
+            // Zhu and Bridson 2005 smoothed spheres, then closed and smoothed (docs/method.md, section 12).
             auto sdf = openvdb::points::rasterizeSmoothSpheres(*pts, r.surfaceRadius, 2.0 * r.surfaceRadius,
                                                                openvdb::LEVEL_SET_HALF_WIDTH, xform);
             sdf->setGridClass(openvdb::GRID_LEVEL_SET);
+            filterSurface(*sdf, r);
             if (r.density) {
                 auto fog = sdf->deepCopy();
                 openvdb::tools::sdfToFogVolume(*fog);

@@ -23,6 +23,10 @@ struct VdbFrameRequest {
     double pointVoxelSize = 0.02;  ///< VDB points voxel (Houdini's default is ~8 points per voxel)
     double surfaceVoxelSize = 0.01;
     double surfaceRadius = 0.01;  ///< world-space sphere radius
+    /// Morphological closing and smoothing of each surface (OpenVDB's LevelSetFilter), in voxels: dilate
+    /// outward, smooth by that many Gaussian passes, then erode inward.
+    double surfaceDilate = 0.0, surfaceErode = 0.0;
+    int surfaceSmooth = 0;
     std::vector<SurfaceGroup> surfaces;
     std::vector<std::string> materialNames, setNames;  ///< what the cloud's material and set indices mean
 };
