@@ -133,14 +133,10 @@ double Simulation::cflTimeStep() const {
     return denominator > 0.0 ? 2.0 * reach / denominator : std::numeric_limits<double>::infinity();
 }
 
-Simulation::StepBound Simulation::stepBound() const {
+Simulation::StepBound Simulation::stepBound(bool withCause) const {
     const double target = settings_.targetDt(), cfl = cflTimeStep() * guard_.stepScale();
-    std::ostringstream cause;
     const std::string retry = guard_.stepScale() < 1.0 ? " (retry)" : "";
-    if (target <= cfl) {
-        cause << "the target step 1 / (fps * substeps)";
-        return {target, cause.str(), "target" + retry};
-    }
+    if (target <= cfl) return {target, withCause ? "the target step 1 / (fps * substeps)" : "", "target" + retry};
     // The fastest wave of the species present, against the fastest particle.
     float c = 0.0f;
     std::string stiffest;
@@ -152,12 +148,15 @@ Simulation::StepBound Simulation::stepBound() const {
                 if (w > c) c = w, stiffest = sp.name;
             },
             state_.species[s]);
-    cause << "the CFL bound, C dx / (c + |v|max + |g| dt) with ";
     const bool wave = c >= state_.bounds.maxSpeed;
+    const std::string limit = (wave ? "cfl_wave_speed " + stiffest : std::string("cfl_particle_speed")) + retry;
+    if (!withCause) return {cfl, "", limit};
+    std::ostringstream cause;
+    cause << "the CFL bound, C dx / (c + |v|max + |g| dt) with ";
     if (wave) cause << "the wave speed c = " << c << " m/s of species " << stiffest;
     else cause << "the fastest particle, |v| = " << state_.bounds.maxSpeed << " m/s";
     if (guard_.stepScale() < 1.0) cause << ", shortened " << 1.0 / guard_.stepScale() << "x for a retry";
-    return {cfl, cause.str(), (wave ? "cfl_wave_speed " + stiffest : std::string("cfl_particle_speed")) + retry};
+    return {cfl, cause.str(), limit};
 }
 
 void Simulation::checkCoordinates() const {
@@ -344,7 +343,7 @@ void Simulation::runFrameSubsteps() {
         }
         const double dt = remaining / pieces;
         // What sets this step, kept for the frame's stats (the last substep's is the frame's; a retry redoes it).
-        StepBound bound = stepBound();
+        StepBound bound = stepBound(false);
         bound.dt = dtMax;
         const double taken = substep(dt);
         if (taken < dt) bound.dt = taken, bound.limit = "max_displacement";

@@ -118,7 +118,9 @@ public:
         std::string cause;
         std::string limit;  ///< the rule in short, as stats.csv's step_limit writes it (FrameStats::stepLimit)
     };
-    StepBound stepBound() const;
+    /// withCause false leaves `cause` empty (each substep keeps only the short limit; the watchdog's error
+    /// asks for the words).
+    StepBound stepBound(bool withCause = true) const;
     /// Call after writing particle velocities directly, so that the next CFL step sees them.
     void refreshSpeedBound();
     /// Replaces every particle's velocity (species after species, in storage order), as a user's script does

@@ -364,6 +364,17 @@ std::string streamScene(const std::string& extra) {
 }
 }  // namespace
 
+namespace {
+/// A stream of water that flowed `volume` through its outlet at 8 per cell: that many particles and that mass, 2%.
+void expectRateAndMass(const ParticleArrays& P, double volume) {
+    const double expected = volume / (kDx * kDx * kDx) * 8.0;
+    EXPECT_NEAR(double(P.size()), expected, 0.02 * expected);
+    double mass = 0.0;
+    for (float m : P.mass) mass += m;
+    EXPECT_NEAR(mass, 1000.0 * volume, 0.02 * 1000.0 * volume);
+}
+}  // namespace
+
 TEST(ContinuousSource, ADiscEmitsAtItsRateWithoutGaps) {
     const std::string dir = tempDir("stream");
     auto sim = buildSimulation(parseScene(streamScene(""), dir + "/scene.json"));
@@ -373,11 +384,7 @@ TEST(ContinuousSource, ADiscEmitsAtItsRateWithoutGaps) {
     // that column of water.
     const double seconds = 12.0 / 24.0, volume = M_PI * 0.01 * 1.0 * seconds;
     const ParticleArrays& P = particlesOf(sim->species()[0]);
-    const double expected = volume / (kDx * kDx * kDx) * 8.0;
-    EXPECT_NEAR(double(P.size()), expected, 0.02 * expected);
-    double mass = 0.0;
-    for (float m : P.mass) mass += m;
-    EXPECT_NEAR(mass, 1000.0 * volume, 0.02 * 1000.0 * volume);
+    expectRateAndMass(P, volume);
     // Along the jet no gap is longer than two particle spacings (a stream, not a string of beads), and the front
     // is where the first material has flowed to.
     std::vector<double> z;
@@ -404,11 +411,7 @@ TEST(ContinuousSource, ARectangleEmitsAtItsRateThroughItsOutline) {
     for (int f = 0; f < 12; ++f) sim->advanceFrame();
     const double seconds = 12.0 / 24.0, volume = 0.3 * 0.1 * 1.0 * seconds;
     const ParticleArrays& P = particlesOf(sim->species()[0]);
-    const double expected = volume / (kDx * kDx * kDx) * 8.0;
-    EXPECT_NEAR(double(P.size()), expected, 0.02 * expected);
-    double mass = 0.0;
-    for (float m : P.mass) mass += m;
-    EXPECT_NEAR(mass, 1000.0 * volume, 0.02 * 1000.0 * volume);
+    expectRateAndMass(P, volume);
     const Vec3d centre(1, 2, 3), n = Vec3d(1, 1, 0).normalized(), u = Vec3d::UnitZ(), w = n.cross(u);
     const double slack = 0.25 * kDx;  // the flow's own pressure spreads the jet's edge a little
     double front = 0.0;
