@@ -91,6 +91,14 @@ public:
         const Motion::Rates rates = motion_.ratesAt(t);
         const bool still = !moving();
         if (skip(still ? centre : pose.toRest(centre), t, c, halfDiagonal)) return 0.0;
+        // The normal condition node by node; Coulomb friction after, patch by patch (FrictionPatches).
+        struct Pressed {
+            int node;
+            Vec3f vc, vt;
+        };
+        Pressed pressed[kLeafNodes];
+        int count = 0;
+        FrictionPatches patches;
         double work = 0.0;
         box.forEach([&](int n) {
             const float m = leaf.mass[n];
@@ -101,15 +109,36 @@ public:
             const Vec3d rest = still ? x : pose.toRest(x);
             geometry_.phiNormal(rest, t, c, phi, normal);
             if (sign_ * phi > 0.0) return;
-            const Vec3d nWorld = still ? Vec3d(sign_ * normal) : Vec3d(sign_ * (pose.R * normal));
+            const Vec3f nWorld = still ? Vec3f((sign_ * normal).template cast<float>()) : Vec3f((sign_ * (pose.R * normal)).template cast<float>());
             const Vec3f vc = still ? Vec3f(Vec3f::Zero()) : Vec3f(velocityAt(x, rest, pose, rates, t, c).template cast<float>());
             Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
             const Vec3f before = v;
-            v = respond(before, nWorld.template cast<float>(), vc, boundary(), friction());
+            if (boundary() == Boundary::Sticky) {
+                v = vc;
+            } else {
+                const Vec3f rel = v - vc;
+                const float vn = rel.dot(nWorld);
+                // Leaving the object: `separate` lets the node go; `slip` holds it on the surface, without friction.
+                if (vn >= 0.0f && boundary() == Boundary::Separate) return;
+                const Vec3f vt = rel - vn * nWorld;
+                v = vc + vt;
+                patches.addNormal(n, m, vn);
+                if (vn < 0.0f && friction() > 0.0f) {
+                    patches.addPressed(n, m, vt);
+                    pressed[count++] = {n, vc, vt};
+                }
+            }
             // A moving collider does work on the material: its impulse times its own velocity, J . v_c (what the
             // node gains less what the inelastic contact dissipates), counted as external.
             if (!still) work += double(m) * (v - before).template cast<double>().dot(vc.template cast<double>());
         });
+        for (int k = 0; k < count; ++k) {
+            const Pressed& p = pressed[k];
+            const float keep = patches.keep(p.node, friction());
+            Eigen::Map<Vec3f> v(leaf.momentum + 3 * p.node);
+            v = p.vc + keep * p.vt;
+            if (!still) work += double(leaf.mass[p.node]) * ((keep - 1.0f) * p.vt).template cast<double>().dot(p.vc.template cast<double>());
+        }
         return work;
     }
 

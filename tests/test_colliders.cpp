@@ -30,6 +30,35 @@ TEST(ColliderResponse, CoulombFriction) {
     EXPECT_TRUE(Collider::respond(Vec3f(1.0f, -2.0f, 0.0f), n, belt, Boundary::Slip, 0.5f).isApprox(belt));
 }
 
+TEST(ColliderResponse, NoFrictionOnANodeMovingAway) {
+    // Friction scales with the normal impulse of a node pressed into the wall; one moving away has none:
+    // `slip` holds it on the surface and leaves its tangential velocity whole.
+    const Vec3f n(0, 1, 0), still = Vec3f::Zero(), away(2.0f, 1.0f, 0.5f);
+    EXPECT_TRUE(Collider::respond(away, n, still, Boundary::Slip, 0.8f).isApprox(Vec3f(2.0f, 0.0f, 0.5f)));
+    EXPECT_TRUE(Collider::respond(away, n, still, Boundary::Separate, 0.8f).isApprox(away));
+}
+
+TEST(FrictionPatches, ACoulombBudgetPerPatchWithTensileImpulsesAgainstIt) {
+    // Two pressed nodes and one held against leaving, all in one leaf: N = 2 * 1 + 1 * 0.5 - 1 * 0.5 = 2,
+    // T = 2 * (1, 0, 0) + 1 * (2, 0, 0) = (4, 0, 0). mu = 1: budget 2 < 4, so each pressed node keeps 1 - 2/4.
+    FrictionPatches p;
+    p.addNormal(0, 2.0f, -1.0f);
+    p.addPressed(0, 2.0f, Vec3f(1, 0, 0));
+    p.addNormal(1, 1.0f, -0.5f);
+    p.addPressed(1, 1.0f, Vec3f(2, 0, 0));
+    p.addNormal(2, 1.0f, 0.5f);
+    EXPECT_FLOAT_EQ(p.keep(0, 1.0f), 0.5f);
+    EXPECT_FLOAT_EQ(p.keep(1, 1.0f), 0.5f);
+    // mu = 2 covers |T|: the patch sticks.
+    EXPECT_EQ(p.keep(0, 2.0f), 0.0f);
+    // Net tension leaves no budget at all.
+    FrictionPatches pulled;
+    pulled.addNormal(0, 1.0f, -0.2f);
+    pulled.addPressed(0, 1.0f, Vec3f(1, 0, 0));
+    pulled.addNormal(1, 1.0f, 0.5f);
+    EXPECT_EQ(pulled.keep(0, 5.0f), 1.0f);
+}
+
 TEST(ColliderGeometry, SignedDistances) {
     const auto plane = planeCollider(Vec3d(0, 1, 0), Vec3d(0, 2, 0), Boundary::Slip, 0.0f);
     EXPECT_DOUBLE_EQ(plane->signedDistance(Vec3d(5, 3, 1), 0.0), 2.0);

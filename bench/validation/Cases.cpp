@@ -3,6 +3,7 @@
 // pressure field), run, and reduce the run to one error number. Formulas and bands are those of
 // docs/validation/cases.md; the published dam-break data sit beside the scenes.
 #include "Cases.h"
+#include "CaseSupport.h"
 
 #include <algorithm>
 #include <chrono>
@@ -18,86 +19,7 @@ namespace mpm::validation {
 
 namespace {
 
-std::string& sceneDirectory() {
-    static std::string dir = MPM_SOURCE_DIR "/scenes/validation";
-    return dir;
-}
-
-/// A loaded case scene, refined and configured, with its particles emitted.
-struct Setup {
-    SceneDesc scene;
-    std::unique_ptr<Simulation> sim;
-};
-
-Setup load(const std::string& name, const CaseConfig& c, double cflOverride = -1.0) {
-    Setup s;
-    s.scene = loadScene(sceneDirectory() + "/" + name + ".json");
-    SimulationSettings& st = s.scene.settings;
-    st.dx /= double(1 << c.level);
-    st.transfer.interpolation = c.interpolation;
-    st.transfer.force = c.force;
-    st.cfl = cflOverride > 0 ? cflOverride : c.cfl;
-    for (ParticleSetDesc& d : s.scene.sets) d.particlesPerCell = c.particlesPerCell;
-    s.sim = buildSimulation(s.scene);
-    s.sim->emitDue();
-    return s;
-}
-
-/// Runs substeps until time t, landing on it exactly; returns the wall seconds spent.
-double runUntil(Simulation& sim, double t) {
-    const auto start = std::chrono::steady_clock::now();
-    const double target = sim.settings().targetDt();
-    while (sim.time() < t - 1e-12) sim.substep(std::min(target, t - sim.time()));
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-template <class M>
-Species<M>& only(Simulation& sim) {
-    return std::get<Species<M>>(sim.species().at(0));
-}
-
-std::string kv(std::initializer_list<std::pair<const char*, double>> items) {
-    std::ostringstream s;
-    bool first = true;
-    for (const auto& [k, v] : items) {
-        s << (first ? "" : ";") << k << "=" << v;
-        first = false;
-    }
-    return s.str();
-}
-
-CaseResult finish(Simulation& sim, double wall, double error, bool pass, std::string detail = "") {
-    CaseResult r;
-    r.error = error;
-    r.pass = pass;
-    r.dx = sim.settings().dx;
-    r.particles = sim.particleCount();
-    r.substeps = sim.substepCount();
-    r.wallSeconds = wall;
-    r.detail = std::move(detail);
-    return r;
-}
-
-/// Least-squares slope and intercept of y against x.
-std::pair<double, double> fitLine(const std::vector<double>& x, const std::vector<double>& y) {
-    const double n = double(x.size());
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (std::size_t i = 0; i < x.size(); ++i) sx += x[i], sy += y[i], sxx += x[i] * x[i], sxy += x[i] * y[i];
-    const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-    return {slope, (sy - slope * sx) / n};
-}
-
-std::vector<std::pair<double, double>> readTable(const std::string& file) {
-    std::ifstream in(sceneDirectory() + "/" + file);
-    if (!in) throw std::runtime_error("cannot open " + sceneDirectory() + "/" + file);
-    std::vector<std::pair<double, double>> rows;
-    for (std::string line; std::getline(in, line);) {
-        if (line.empty() || line[0] == '#' || !std::isdigit(static_cast<unsigned char>(line[0]))) continue;
-        const auto comma = line.find(',');
-        rows.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
-    }
-    return rows;
-}
+using namespace support;
 
 // ---------------------------------------------------------------------------------------------------
 // 1. Free fall: symplectic Euler is exact, x_n = x0 + v0 t + g t^2 / 2 + g dt t / 2 at fixed dt.
@@ -422,7 +344,7 @@ std::string CaseConfig::label() const {
     return s.str();
 }
 
-void setSceneDirectory(const std::string& dir) { sceneDirectory() = dir; }
+void setSceneDirectory(const std::string& dir) { support::sceneDirectory() = dir; }
 
 const std::vector<ValidationCase>& cases() {
     static const std::vector<ValidationCase> all = [] {
@@ -442,6 +364,7 @@ const std::vector<ValidationCase>& cases() {
             v.push_back({"angle_of_repose_" + std::to_string(phi), "|flank angle - phi| [degrees]",
                          "angle in [phi - 3, phi + 6] degrees", 0, 1, 0,
                          [phi](const CaseConfig& c) { return angleOfRepose(c, phi); }});
+        support::addContactCases(v);
         return v;
     }();
     return all;

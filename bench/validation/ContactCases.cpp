@@ -1,0 +1,114 @@
+// The contact cases (docs/validation/cases.md, cases 9 on): Coulomb friction against the rigid-block answer,
+// on a tilted plane (nodes at every distance from the surface) and on a flat floor with gravity tilted (a row of
+// nodes exactly on the surface), for each boundary mode that carries friction.
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "CaseSupport.h"
+
+namespace mpm::validation::support {
+
+namespace {
+
+/// A block on a plane of friction mu, gravity at theta to the plane's normal.
+struct Slope {
+    double thetaDegrees = 30.0;
+    float mu = 0.3f;
+    Boundary boundary = Boundary::Separate;
+    bool gridAligned = false;  ///< flat floor, gravity tilted; otherwise a tilted plane under vertical gravity
+};
+
+/// When the friction cases measure the block: after the drop onto the plane has rung down (about 4 periods
+/// of the block's lowest vertical mode), to the end.
+constexpr double kSettled = 0.1, kSlideEnd = 0.5;
+
+// 9. Friction on a slope: a jelly block (E = 2e5 Pa, 0.2 x 0.1 x 0.1 m) released at rest. A rigid block's answer:
+// it stays put when mu >= tan(theta), and otherwise slides with a = g (sin(theta) - mu cos(theta)).
+CaseResult slide(const CaseConfig& c, const Slope& k) {
+    const double theta = k.thetaDegrees * M_PI / 180.0, g = 9.81;
+    // The tilted plane is the flat floor turned by -theta about z, with the block and gravity turned alike.
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(k.gridAligned ? 0.0 : -theta, Vec3d::UnitZ()).toRotationMatrix();
+    const Vec3d gravityFloor(g * std::sin(theta), -g * std::cos(theta), 0.0);
+    Setup s = load("friction_block", c, -1.0, [&](SceneDesc& d) {
+        d.settings.gravity = R * gravityFloor;
+        ColliderDesc& floor = d.colliders.at(0);
+        std::get<Plane>(floor.shape).normal = R * Vec3d::UnitY();
+        floor.boundary = k.boundary;
+        floor.friction = k.mu;
+    });
+    Simulation& sim = *s.sim;
+    auto& sp = only<FixedCorotated>(sim);
+    // Released in the static state of a long block, so that it does not ring on landing (an elastic block
+    // dropped onto the plane at zero stress rings with a normal force from 0 to twice its weight, and slips
+    // whenever it dips below W tan(theta) / mu, which the rigid-block answer knows nothing of):
+    // sigma_yy = -rho g cos(theta) (H - y), sigma_xy = rho g sin(theta) (H - y), F = I + the linear strain.
+    double top = 0.0;
+    for (const Vec3d& x : sp.p.x) top = std::max(top, x[1]);
+    top += 0.25 * sim.settings().dx;  // half a particle spacing above the top particle (ppc 8)
+    const double mu = sp.params.mu, lambda = sp.params.lambda, rho = sp.params.density;
+    for (std::size_t i = 0; i < sp.size(); ++i) {
+        const double depth = top - sp.p.x[i][1];
+        Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();
+        sigma(1, 1) = -rho * g * std::cos(theta) * depth;
+        sigma(0, 1) = sigma(1, 0) = rho * g * std::sin(theta) * depth;
+        const Eigen::Matrix3d strain = (sigma - lambda / (2 * mu + 3 * lambda) * sigma.trace() * Eigen::Matrix3d::Identity()) / (2 * mu);
+        sp.state.F[i] = (R * (Eigen::Matrix3d::Identity() + strain) * R.transpose()).cast<float>();
+        sp.p.x[i] = R * sp.p.x[i];
+    }
+    const Vec3d downhill = R * Vec3d::UnitX();
+    auto along = [&] {
+        double m = 0, d = 0, v = 0;
+        for (std::size_t i = 0; i < sp.size(); ++i) {
+            m += sp.p.mass[i];
+            d += sp.p.mass[i] * sp.p.x[i].dot(downhill);
+            v += sp.p.mass[i] * double(sp.p.v[i].cast<double>().dot(downhill));
+        }
+        return std::pair{d / m, v / m};
+    };
+    double wall = runUntil(sim, kSettled);
+    const double d0 = along().first;
+    std::vector<double> t, v;
+    const double dt = 0.01;
+    for (double at = kSettled + dt; at <= kSlideEnd + 1e-9; at += dt) {
+        wall += runUntil(sim, at);
+        t.push_back(sim.time());
+        v.push_back(along().second);
+    }
+    const double slid = (along().first - d0) / sim.settings().dx;
+    const double tanTheta = std::tan(theta);
+    if (k.mu >= tanTheta) {
+        // Static: the block must not creep. Error: cells slid in the measured window.
+        return finish(sim, wall, std::abs(slid), std::abs(slid) < 0.1,
+                      kv({{"slid_cells", slid}, {"final_speed", v.back()}, {"mu", k.mu}, {"tan_theta", tanTheta}}));
+    }
+    const double expected = g * (std::sin(theta) - k.mu * std::cos(theta));
+    const double a = fitLine(t, v).first;
+    const double err = std::abs(a - expected) / expected;
+    return finish(sim, wall, err, err < 0.03, kv({{"acceleration", a}, {"expected", expected}, {"slid_cells", slid}, {"mu", k.mu}}));
+}
+
+std::string slopeName(const Slope& k) {
+    std::ostringstream s;
+    s << (k.gridAligned ? "floor_" : "incline_") << boundaryName(k.boundary) << "_" << k.thetaDegrees << "deg_mu" << k.mu;
+    return s.str();
+}
+
+}  // namespace
+
+void addContactCases(std::vector<ValidationCase>& v) {
+    // On both sides of tan(theta) (0.364 at 20 degrees, 0.577 at 30), on the tilted plane and the flat floor.
+    const std::vector<Slope> slopes{
+        {20, 0.2f, Boundary::Separate, false}, {20, 0.5f, Boundary::Separate, false}, {30, 0.3f, Boundary::Separate, false},
+        {30, 0.7f, Boundary::Separate, false}, {30, 0.3f, Boundary::Slip, false},     {30, 0.7f, Boundary::Slip, false},
+        {30, 0.3f, Boundary::Separate, true},  {30, 0.3f, Boundary::Slip, true},      {30, 0.7f, Boundary::Separate, true},
+        {30, 0.7f, Boundary::Slip, true}};
+    for (const Slope& k : slopes) {
+        const bool sticks = k.mu >= std::tan(k.thetaDegrees * M_PI / 180.0);
+        v.push_back({slopeName(k),
+                     sticks ? "|distance slid| from 0.1 to 0.5 s [cells]" : "|a - g (sin - mu cos)| / g (sin - mu cos), 0.1 to 0.5 s",
+                     sticks ? "< 0.1 cells (static friction holds)" : "< 3%", 0, 1, 0, [k](const CaseConfig& c) { return slide(c, k); }});
+    }
+}
+
+}  // namespace mpm::validation::support
