@@ -16,7 +16,7 @@ std::vector<std::unique_ptr<ColliderContext>> contextsFor(const std::vector<std:
 }  // namespace
 
 GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& g,
-                                      float dt, double tEnd) {
+                                      float dt, double tEnd, bool toVelocity) {
     return reduceLeafRanges(
         grid.leafCount(), LeafGrain::Nodes, GridUpdateResult{},
         [&](std::size_t begin, std::size_t end, GridUpdateResult& acc) {
@@ -26,12 +26,13 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
                 // Only the nodes P2G wrote: all others are zero, and stay so.
                 const NodeBox& box = grid.writtenBox(l);
                 // v = (mv) / m on nodes with mass (exact comparison: a threshold would lose momentum), then gravity.
-                box.forEach([&](int n) {
-                    Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
-                    const float m = leaf.mass[n];
-                    if (m != 0.0f) v = v / m + dt * g;
-                    else v.setZero();
-                });
+                if (toVelocity)
+                    box.forEach([&](int n) {
+                        Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
+                        const float m = leaf.mass[n];
+                        if (m != 0.0f) v = v / m + dt * g;
+                        else v.setZero();
+                    });
                 for (std::size_t c = 0; c < colliders.size(); ++c) acc.work += colliders[c]->applyToLeaf(leaf, box, grid.dx(), tEnd, contexts[c].get());
                 box.forEach([&](int n) {
                     if (leaf.mass[n] != 0.0f) acc.maxSpeed = std::max(acc.maxSpeed, Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm());

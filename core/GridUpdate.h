@@ -17,8 +17,10 @@ struct GridUpdateResult {
 };
 
 /// Turns momentum into velocity on every written node, adds gravity, applies the colliders at time tEnd.
+/// With `toVelocity` false the nodes already hold velocities and only the colliders act (multi-field contact
+/// runs between the two).
 GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
-                                      float dt, double tEnd);
+                                      float dt, double tEnd, bool toVelocity = true);
 
 struct ProjectionSummary {
     double work = 0.0;      ///< work moving colliders did on the particles they moved

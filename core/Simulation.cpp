@@ -11,6 +11,7 @@
 #include <type_traits>
 
 #include "core/GridUpdate.h"
+#include "core/MultiField.h"
 
 namespace mpm {
 
@@ -35,14 +36,24 @@ private:
 
 Simulation::Simulation(const SimulationSettings& settings)
     : settings_(settings), guard_(settings.stability, settings.gravity.norm(), settings.dx) {
-    withKernel(settings_.transfer.interpolation, [&]<class K>() { grid_.configure(settings_.dx, K::kBaseShift, K::kWidth); });
+    fields_.resize(1);
+    fieldSpecies_.resize(1);
+    withKernel(settings_.transfer.interpolation, [&]<class K>() { fields_[0].configure(settings_.dx, K::kBaseShift, K::kWidth); });
 }
 
 float Simulation::kernelInertiaScale() const {
     return withKernel(settings_.transfer.interpolation, []<class K>() { return 1.0f / K::kInverseInertia; });
 }
 
-int Simulation::addSpecies(AnySpecies species) {
+int Simulation::addSpecies(AnySpecies species, int body) {
+    if (body < 0) throw std::invalid_argument("addSpecies: body " + std::to_string(body) + " is negative");
+    const std::size_t field = settings_.contact == ContactModel::MultiField ? std::size_t(body) : 0;
+    while (fields_.size() <= field) {
+        fields_.emplace_back();
+        fields_.back().configure(fields_[0].geometry().dx, fields_[0].geometry().baseShift, fields_[0].geometry().width);
+        fieldSpecies_.emplace_back();
+    }
+    fieldSpecies_[field].push_back(int(state_.species.size()));
     state_.species.push_back(std::move(species));
     state_.bounds.minStiffnessKey.push_back(std::numeric_limits<float>::infinity());
     destination_.emplace_back();
@@ -228,34 +239,108 @@ void Simulation::permute(S& sp, const std::vector<uint32_t>& dest) {
     });
 }
 
+template <class Fn>
+void Simulation::withField(std::size_t f, Fn&& fn) {
+    if (fields_.size() == 1) {
+        fn(fields_[0], state_.species);
+        return;
+    }
+    const std::vector<int>& members = fieldSpecies_[f];
+    fieldScratch_.clear();
+    for (int s : members) fieldScratch_.push_back(std::move(state_.species[s]));
+    // Back where they belong whatever fn does (a throw included).
+    struct Return {
+        Simulation& sim;
+        const std::vector<int>& members;
+        ~Return() {
+            for (std::size_t i = 0; i < members.size(); ++i) sim.state_.species[members[i]] = std::move(sim.fieldScratch_[i]);
+        }
+    } back{*this, members};
+    fn(fields_[f], fieldScratch_);
+}
+
 void Simulation::bin() {
     PhaseClock clock;
-    std::vector<AnySpecies>& species = state_.species;
-    std::vector<BinRequest> requests(species.size());
-    for (std::size_t s = 0; s < species.size(); ++s) {
-        std::visit([&](auto& sp) { requests[s] = BinRequest{&sp.p.x, &destination_[s], &sp.leafStart}; }, species[s]);
-    }
-    grid_.updateTopology(requests);
-    clock.lap(phases_.topology);
-    grid_.sortParticles(requests);
-    for (std::size_t s = 0; s < species.size(); ++s) {
-        const std::vector<uint32_t>& dest = destination_[s];
-        // Particles rarely change leaf between substeps: skip the permutation when it is the identity.
-        const bool identity = tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, dest.size(), kPermuteGrain), true,
-            [&](const auto& r, bool ok) {
-                for (std::size_t i = r.begin(); ok && i < r.end(); ++i) ok = dest[i] == i;
-                return ok;
-            },
-            [](bool a, bool b) { return a && b; });
-        if (!identity) std::visit([&](auto& sp) { permute(sp, dest); }, species[s]);
-    }
-    clock.lap(phases_.binning);
+    for (std::size_t f = 0; f < fields_.size(); ++f)
+        withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
+            const std::vector<int>& members = fieldSpecies_[f];
+            std::vector<BinRequest> requests(species.size());
+            for (std::size_t s = 0; s < species.size(); ++s) {
+                std::vector<uint32_t>& dest = destination_[fields_.size() == 1 ? s : std::size_t(members[s])];
+                std::visit([&](auto& sp) { requests[s] = BinRequest{&sp.p.x, &dest, &sp.leafStart}; }, species[s]);
+            }
+            grid.updateTopology(requests);
+            clock.lap(phases_.topology);
+            grid.sortParticles(requests);
+            for (std::size_t s = 0; s < species.size(); ++s) {
+                const std::vector<uint32_t>& dest = *requests[s].destination;
+                // Particles rarely change leaf between substeps: skip the permutation when it is the identity.
+                const bool identity = tbb::parallel_reduce(
+                    tbb::blocked_range<std::size_t>(0, dest.size(), kPermuteGrain), true,
+                    [&](const auto& r, bool ok) {
+                        for (std::size_t i = r.begin(); ok && i < r.end(); ++i) ok = dest[i] == i;
+                        return ok;
+                    },
+                    [](bool a, bool b) { return a && b; });
+                if (!identity) std::visit([&](auto& sp) { permute(sp, dest); }, species[s]);
+            }
+            clock.lap(phases_.binning);
+        });
 }
 
 GridUpdateResult Simulation::updateGrid(float dt) {
     for (const auto& c : colliders_) c->prepare(state_.time + dt);
-    return updateGridVelocities(grid_, colliders_, settings_.gravity.cast<float>(), dt, state_.time + dt);
+    const Vec3f g = settings_.gravity.cast<float>();
+    const double tEnd = state_.time + dt;
+    if (fields_.size() == 1) return updateGridVelocities(fields_[0], colliders_, g, dt, tEnd);
+    // Bodies of their own: velocities in every field, then the contact between them, then the colliders.
+    static const std::vector<std::unique_ptr<Collider>> kNone;
+    for (const SparseGrid& field : fields_) updateGridVelocities(field, kNone, g, dt, tEnd);
+    resolveFieldContact(fields_, settings_.contactFriction);
+    GridUpdateResult out;
+    for (const SparseGrid& field : fields_) {
+        const GridUpdateResult r = updateGridVelocities(field, colliders_, g, dt, tEnd, false);
+        out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
+        out.work += r.work;
+    }
+    return out;
+}
+
+void Simulation::scatter(float dt) {
+    for (std::size_t f = 0; f < fields_.size(); ++f)
+        withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) { particlesToGrid(grid, species, settings_.transfer, dt); });
+}
+
+G2PSummary Simulation::gather(float dt) {
+    if (fields_.size() == 1) return gridToParticles(fields_[0], state_.species, settings_.transfer, dt);
+    // Field by field, with each field's per-species results put back at the species' own index.
+    G2PSummary out;
+    out.minStiffnessKey.assign(state_.species.size(), std::numeric_limits<float>::infinity());
+    for (std::size_t f = 0; f < fields_.size(); ++f)
+        withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
+            const G2PSummary r = gridToParticles(grid, species, settings_.transfer, dt);
+            const std::vector<int>& members = fieldSpecies_[f];
+            out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
+            for (std::size_t s = 0; s < members.size(); ++s) out.minStiffnessKey[members[s]] = r.minStiffnessKey[s];
+            if (out.badParticle < 0 && r.badParticle >= 0) {
+                out.badSpecies = members[r.badSpecies];
+                out.badParticle = r.badParticle;
+                out.badField = r.badField;
+            }
+        });
+    return out;
+}
+
+ProjectionSummary Simulation::holdOutOfColliders(float dt) {
+    ProjectionSummary out;
+    for (std::size_t f = 0; f < fields_.size(); ++f)
+        withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
+            const ProjectionSummary r = projectOutOfColliders(grid, species, colliders_, state_.time + dt, dt, settings_.gravity);
+            out.work += r.work;
+            out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
+            out.moved += r.moved;
+        });
+    return out;
 }
 
 double Simulation::substep(double dtMax) {
@@ -265,7 +350,7 @@ double Simulation::substep(double dtMax) {
     // Time step: the caller's bound (target and frame end), and the CFL condition (halved on retries).
     double dt = std::min(dtMax, cflTimeStep() * guard_.stepScale());
     // P2G: mass and momentum, with the stress impulse of this step folded in (thesis 3.14, 3.15, 3.24).
-    particlesToGrid(grid_, state_.species, settings_.transfer, float(dt));
+    scatter(float(dt));
     clock.lap(phases_.p2g);
     // Grid update: v = mv/m, gravity, colliders and friction (3.20, 3.26, section 5).
     GridUpdateResult gridUpdate = updateGrid(float(dt));
@@ -273,15 +358,15 @@ double Simulation::substep(double dtMax) {
     // Thesis pseudocode 3: if a node would move more than maxDisplacement cells, redo with a shorter step.
     if (settings_.maxDisplacement > 0.0 && gridUpdate.maxSpeed * dt > settings_.maxDisplacement * settings_.dx) {
         dt = settings_.maxDisplacement * settings_.dx / gridUpdate.maxSpeed;
-        particlesToGrid(grid_, state_.species, settings_.transfer, float(dt));
+        scatter(float(dt));
         clock.lap(phases_.p2g);
         gridUpdate = updateGrid(float(dt));
         clock.lap(phases_.grid);
     }
     // G2P: velocity, affine velocity, deformation update with return mapping, advection (3.17-3.19, 3.21).
-    const G2PSummary g2p = gridToParticles(grid_, state_.species, settings_.transfer, float(dt));
+    const G2PSummary g2p = gather(float(dt));
     // Particles found inside a collider (walls thinner than a cell included) go back to its surface.
-    const ProjectionSummary held = projectOutOfColliders(grid_, state_.species, colliders_, state_.time + dt, float(dt), settings_.gravity);
+    const ProjectionSummary held = holdOutOfColliders(float(dt));
     clock.lap(phases_.g2p);
     // Work moving colliders did is external: the energy check counts it.
     state_.energy.work += gridUpdate.work + held.work;
@@ -388,8 +473,9 @@ FrameStats Simulation::measure() const {
     FrameStats st = measureParticles(state_.species, settings_.dx, kernelInertiaScale(), settings_.gravity);
     st.frame = state_.frame;
     st.time = state_.time;
-    st.activeLeaves = grid_.leafCount();
-    st.gridBytes = grid_.contentBytes();
+    st.activeLeaves = 0;
+    st.gridBytes = 0;
+    for (const SparseGrid& field : fields_) st.activeLeaves += field.leafCount(), st.gridBytes += field.contentBytes();
     return st;
 }
 

@@ -23,6 +23,10 @@
 
 namespace mpm {
 
+/// How bodies in contact share the grid: one velocity field for all material (bodies that touch move
+/// together there), or one field per body with a contact condition between them (core/MultiField.h).
+enum class ContactModel { SingleField, MultiField };
+
 struct SimulationSettings {
     double dx = 0.02;                        ///< grid spacing [m]
     Vec3d gravity = Vec3d(0.0, -9.81, 0.0);  ///< Y is up, as in Houdini [m/s^2]
@@ -34,6 +38,8 @@ struct SimulationSettings {
     double maxDisplacement = 0.0;  ///< thesis rule: max node displacement per substep in cells; 0 = off
     long long maxSubstepsPerFrame = 20000;  ///< watchdog: a frame that would need more stops the run
     StabilitySettings stability;
+    ContactModel contact = ContactModel::SingleField;
+    float contactFriction = 0.0f;  ///< Coulomb mu between bodies (multi_field)
 
     double targetDt() const { return 1.0 / (fps * substepsPerFrame); }
 };
@@ -82,7 +88,9 @@ public:
     explicit Simulation(const SimulationSettings& settings);
 
     const SimulationSettings& settings() const { return settings_; }
-    int addSpecies(AnySpecies species);
+    /// `body` picks the velocity field the species scatters into under ContactModel::MultiField (bodies are
+    /// numbered from 0 without gaps); with one field every species shares field 0.
+    int addSpecies(AnySpecies species, int body = 0);
     /// Appends particles at rest state (F = I, J = 1, C = 0) and gives them fresh ids.
     /// `perParticle`, when not empty, is added to v particle by particle; `masses` and `volumes`, when not
     /// empty, replace mass and volume particle by particle.
@@ -138,7 +146,10 @@ public:
     const std::vector<AnySpecies>& species() const { return state_.species; }
     const std::vector<std::unique_ptr<Collider>>& colliders() const { return colliders_; }
     const std::vector<Emitter>& emitters() const { return emitters_; }
-    const SparseGrid& grid() const { return grid_; }
+    /// The first velocity field (the only one unless bodies have fields of their own).
+    const SparseGrid& grid() const { return fields_.front(); }
+    /// Every velocity field: one per body under ContactModel::MultiField, else one.
+    const std::vector<SparseGrid>& fields() const { return fields_; }
     double time() const { return state_.time; }
     int frame() const { return state_.frame; }
     long long substepCount() const { return state_.substeps; }
@@ -154,8 +165,16 @@ private:
     void checkCoordinates() const;
     void bin();
     GridUpdateResult updateGrid(float dt);
+    /// P2G, G2P and the particle pass of the colliders, field by field.
+    void scatter(float dt);
+    G2PSummary gather(float dt);
+    ProjectionSummary holdOutOfColliders(float dt);
     template <class S>
     void permute(S& species, const std::vector<uint32_t>& destination);
+    /// Calls fn(grid, species) for field f with the species that scatter into it, in species order (with one
+    /// field, all of them in place; otherwise they are moved into a scratch list and back, pointers only).
+    template <class Fn>
+    void withField(std::size_t f, Fn&& fn);
 
     // The model.
     SimulationSettings settings_;
@@ -164,7 +183,9 @@ private:
     // The state.
     SimState state_;
     // Step caches, rebuilt from the state every substep.
-    SparseGrid grid_;
+    std::vector<SparseGrid> fields_;                 ///< velocity fields: one, or one per body
+    std::vector<std::vector<int>> fieldSpecies_;     ///< per field, its species
+    std::vector<AnySpecies> fieldScratch_;           ///< a field's species while its transfers run
     std::vector<std::vector<uint32_t>> destination_;  ///< per species: sorted slot of each particle
     std::vector<std::byte> scratch_;                  ///< permutation buffer, shared by every particle array
     // Policy and timings.

@@ -1,5 +1,6 @@
 #include "io/SceneBuilder.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -326,6 +327,10 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
     std::vector<std::vector<Vec3d>> positions(scene.sets.size());
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const ParticleSetDesc& d = scene.sets[i];
+        if (!d.body.empty() && scene.settings.contact != ContactModel::MultiField)
+            out.push_back(scene.file + ": /sets/" + std::to_string(i) + "/body: \"" + d.body +
+                          "\" names a body, but simulation.contact is single_field, where all bodies share one velocity field "
+                          "(set it to multi_field)");
         if (d.continuous || isOutlet(d.shape)) continue;  // a stream enters over time
         positions[i] = sampleSet(scene, i).positions;
         const std::string where = scene.file + ": /sets/" + std::to_string(i);
@@ -379,11 +384,20 @@ SpeciesLayout speciesLayout(const SceneDesc& scene) {
 std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene) {
     auto sim = std::make_unique<Simulation>(scene.settings);
     const SpeciesLayout layout = speciesLayout(scene);
+    // Bodies, numbered in order of first appearance: a set's `body` name, or else its own name.
+    std::vector<int> bodyOf;
+    std::vector<std::string> bodies;
+    for (const ParticleSetDesc& d : scene.sets) {
+        const std::string& name = d.body.empty() ? d.name : d.body;
+        const auto at = std::find(bodies.begin(), bodies.end(), name);
+        bodyOf.push_back(int(at - bodies.begin()));
+        if (at == bodies.end()) bodies.push_back(name);
+    }
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const ParticleSetDesc& d = scene.sets[i];
         AnyMaterialParams params = d.params;
         visitMaterialParams(params, [&]<class M>(typename M::Params& p) { M::scaleStiffness(p, d.lambdaScale, d.muScale); });
-        const int species = sim->addSpecies(makeSpecies(d.name, params));
+        const int species = sim->addSpecies(makeSpecies(d.name, params), bodyOf[i]);
         if (species != layout.speciesOfSet[i])
             throw std::logic_error("buildSimulation: species order differs from speciesLayout");
         Emitter e;

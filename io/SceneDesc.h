@@ -23,6 +23,7 @@ enum class Sampling { Poisson, Grid, Lattice };
 struct ParticleSetDesc {
     std::string name;
     std::string material = "water";  ///< scene name of the material (materials/Materials.h)
+    std::string body;                ///< multi_field contact: sets sharing a body name share a velocity field (empty: its own)
     AnyMaterialParams params;        ///< its parameters, overrides applied; the Lame scales below come on top
     SetShape shape;
     Vec3f velocity = Vec3f::Zero();

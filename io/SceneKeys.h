@@ -15,6 +15,8 @@ inline constexpr Named<Interpolation> kInterpolations[] = {{Interpolation::Quadr
                                                            {Interpolation::Cubic, "cubic"}};
 inline constexpr Named<TransferScheme> kTransfers[] = {{TransferScheme::APIC, "apic"}, {TransferScheme::PIC, "pic"}};
 inline constexpr Named<ForceScheme> kForces[] = {{ForceScheme::Standard, "standard"}, {ForceScheme::MLS, "mls"}};
+inline constexpr Named<ContactModel> kContactModels[] = {{ContactModel::SingleField, "single_field"},
+                                                         {ContactModel::MultiField, "multi_field"}};
 inline constexpr Named<Boundary> kBoundaries[] = {
     {Boundary::Sticky, "sticky"}, {Boundary::Slip, "slip"}, {Boundary::Separate, "separate"}};
 inline constexpr Named<Sampling> kSamplings[] = {
@@ -49,6 +51,13 @@ void simulationKeys(V& v, SceneDesc& d) {
         s.transfer.force, std::span<const Named<ForceScheme>>(kForces));
     v.number(Key{.name = "cfl", .help = "C in dt <= C dx / (c + max speed), c the fastest wave speed", .lo = 1e-3, .hi = 10.0},
              s.cfl);
+    v.choice(Key{.name = "contact",
+                 .help = "bodies in contact: single_field (one velocity field, touching bodies move together there) or "
+                         "multi_field (a field per body, which bounce and part; a body is a set, or the sets sharing a `body` name)",
+                 .noun = "contact model"},
+             s.contact, std::span<const Named<ContactModel>>(kContactModels));
+    v.number(Key{.name = "contact_friction", .help = "Coulomb friction between bodies (multi_field)", .lo = 0.0, .hi = 100.0},
+             s.contactFriction);
     v.flag(Key{.name = "adaptive", .help = "apply the CFL bound (off: the fixed target dt)"}, s.adaptive);
     v.number(Key{.name = "max_displacement",
                  .help = "thesis rule: largest grid-node displacement per substep in cells; 0 = off",
@@ -145,6 +154,8 @@ template <class V>
 void setKeys(V& v, ParticleSetDesc& d) {
     v.text(Key{.name = "name", .help = "unique name (default set<i>)"}, d.name);
     v.choice(Key{.name = "material", .help = "material preset", .noun = "material"}, d.material, materialSceneNames());
+    v.text(Key{.name = "body", .help = "multi_field contact: sets with one body name share a velocity field (default: the set's own)"},
+           d.body);
     v.vec3(Key{.name = "velocity", .help = "initial velocity", .unit = "m/s"}, d.velocity);
     if (!v.given("color")) d.colour = defaultColour(d.material);
     v.vec3(Key{.name = "color", .help = "colour of its points (Cd, linear RGB 0..1; default: the material's)"}, d.colour);

@@ -88,6 +88,38 @@ CaseResult slide(const CaseConfig& c, const Slope& k) {
     return finish(sim, wall, err, err < 0.03, kv({{"acceleration", a}, {"expected", expected}, {"slid_cells", slid}, {"mu", k.mu}}));
 }
 
+/// The two spheres' collision is over by then (approach 0.02 s, Hertz contact time about 0.07 s).
+constexpr double kCollisionEnd = 0.2;
+
+// 10. Two elastic spheres collide head on (jelly, E = 1e5 Pa, R = 0.08 m, 0.5 m/s each, no gravity): an
+// elastic collision keeps the energy, which ends as the spheres' rebound and their ringing. Error: the share of
+// kinetic plus stored energy lost by the end; the spheres must have parted (moving apart, no node shared).
+CaseResult twoSpheres(const CaseConfig& c, ContactModel model) {
+    Setup s = load("two_spheres", c, -1.0, [&](SceneDesc& d) { d.settings.contact = model; });
+    Simulation& sim = *s.sim;
+    auto energy = [&] {
+        const FrameStats st = sim.measure();
+        return st.kineticEnergy + st.elasticEnergy;
+    };
+    const double e0 = energy();
+    const double wall = runUntil(sim, kCollisionEnd);
+    // Centroid velocity and position of each sphere (sets 0 and 1, one species each).
+    Vec3d x[2], v[2];
+    for (int b = 0; b < 2; ++b) {
+        const ParticleArrays& P = particlesOf(sim.species()[b]);
+        double m = 0;
+        x[b] = v[b] = Vec3d::Zero();
+        for (std::size_t i = 0; i < P.size(); ++i) m += P.mass[i], x[b] += P.mass[i] * P.x[i], v[b] += P.mass[i] * P.v[i].cast<double>();
+        x[b] /= m;
+        v[b] /= m;
+    }
+    const double parting = (v[1] - v[0]).dot((x[1] - x[0]).normalized());
+    const double loss = 1.0 - energy() / e0;
+    const FrameStats st = sim.measure();
+    return finish(sim, wall, loss, loss < 0.05 && parting > 0.0,
+                  kv({{"parting_speed", parting}, {"approach_speed", 1.0}, {"momentum", st.momentum.norm()}, {"e0", e0}}));
+}
+
 std::string slopeName(const Slope& k) {
     std::ostringstream s;
     s << (k.gridAligned ? "floor_" : "incline_") << boundaryName(k.boundary) << "_" << k.thetaDegrees << "deg_mu" << k.mu;
@@ -109,6 +141,11 @@ void addContactCases(std::vector<ValidationCase>& v) {
                      sticks ? "|distance slid| from 0.1 to 0.5 s [cells]" : "|a - g (sin - mu cos)| / g (sin - mu cos), 0.1 to 0.5 s",
                      sticks ? "< 0.1 cells (static friction holds)" : "< 3%", 0, 1, 0, [k](const CaseConfig& c) { return slide(c, k); }});
     }
+    // At R / dx = 4 and 8: one velocity field for both, and one each.
+    for (const auto& [name, model] : {std::pair{"two_spheres_single_field", ContactModel::SingleField},
+                                      std::pair{"two_spheres_multi_field", ContactModel::MultiField}})
+        v.push_back({name, "energy lost in a head-on elastic collision, (E0 - E) / E0, kinetic + stored", "< 5% at R/dx = 8, and parted", 1,
+                     1, 0, [model](const CaseConfig& c) { return twoSpheres(c, model); }});
 }
 
 }  // namespace mpm::validation::support

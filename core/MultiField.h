@@ -1,0 +1,31 @@
+#pragma once
+// Multi-body contact on shared grid nodes (simulation.contact = "multi_field"): every body scatters into a
+// velocity field of its own (its own SparseGrid), and where two or more bodies have mass at one node the
+// fields are made to agree only as far as contact asks (Bardenhagen et al. 2000, "The material-point method
+// for granular materials", sec. 3): with the centre-of-mass velocity v_cm = sum m_b v_b / sum m_b and body b's
+// outward normal n_b, a body approaching the others, (v_b - v_cm) . n_b > 0, loses that normal part, and its
+// tangential part relative to v_cm is cut by Coulomb friction mu (v_b - v_cm) . n_b, or removed while the
+// friction covers it. Bodies moving apart are left alone: they part instead of sticking.
+// Normals follow Huang et al. 2011 ("Contact algorithms for the material point method in impact and
+// penetration simulation", IJNME 85): n_b is the unit vector along sum_{c != b} grad m_c - grad m_b, so two
+// bodies at a node get opposite normals and the contact conserves momentum exactly. grad m is the central
+// difference of the node masses. Contact starts where the bodies first share nodes: a volume-fraction test
+// (Lemiale et al. 2010: contact only where the bodies' volumes fill the node's cell) was measured on the
+// two-sphere case and lost more energy (8.4% against 4.9% at R/dx = 8), the bodies overlapping before it acts.
+#include <vector>
+
+#include "sparse/SparseGrid.h"
+
+namespace mpm {
+
+struct FieldContactSummary {
+    std::size_t nodes = 0;     ///< nodes where two or more bodies met
+    std::size_t contacts = 0;  ///< (node, body) pairs that approached and got the contact condition
+};
+
+/// Applies the contact condition on every node that more than one field has mass at. The fields hold
+/// velocities (after gravity, before colliders). Each node is handled by one task, the one visiting the lowest field that has mass there, so the
+/// result does not depend on the thread count.
+FieldContactSummary resolveFieldContact(std::vector<SparseGrid>& fields, float friction);
+
+}  // namespace mpm
