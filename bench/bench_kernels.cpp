@@ -53,7 +53,7 @@ struct KernelScene {
         grid.rebuild(requests);
         colliders.push_back(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, 0.0f));
         particlesToGrid(grid, species, transfer, dt);
-        updateGridVelocities(grid, colliders, Vec3f(0, -9.81f, 0), dt, 0.0);
+        updateGridVelocities(grid, colliders, Vec3f(0, -9.81f, 0), dt, 0.0, SurfaceContact{});
     }
     long particles() const {
         long n = 0;
@@ -90,7 +90,7 @@ BENCHMARK(BM_Binning)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_GridUpdate(benchmark::State& st) {
     KernelScene& s = scene("water");
-    for (auto _ : st) benchmark::DoNotOptimize(updateGridVelocities(s.grid, s.colliders, Vec3f(0, -9.81f, 0), s.dt, 0.0));
+    for (auto _ : st) benchmark::DoNotOptimize(updateGridVelocities(s.grid, s.colliders, Vec3f(0, -9.81f, 0), s.dt, 0.0, SurfaceContact{}));
     perParticle(st, s.particles());
 }
 BENCHMARK(BM_GridUpdate)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -112,7 +112,7 @@ void BM_SprayTransfers(benchmark::State& st) {
     KernelScene& s = scene("water", Interpolation::Quadratic, true);
     for (auto _ : st) {
         particlesToGrid(s.grid, s.species, s.transfer, s.dt);
-        updateGridVelocities(s.grid, s.colliders, Vec3f(0, -9.81f, 0), s.dt, 0.0);
+        updateGridVelocities(s.grid, s.colliders, Vec3f(0, -9.81f, 0), s.dt, 0.0, SurfaceContact{});
         benchmark::DoNotOptimize(gridToParticles(s.grid, s.species, s.transfer, 1e-3f * s.dt));
     }
     perParticle(st, s.particles());

@@ -72,6 +72,26 @@ private:
     Patch patches_[kPatches];
 };
 
+/// Where a wall acts (simulation.wall_contact). By default, on every node inside the collider that has mass, so
+/// the wall reaches material up to the stencil's half width (1.5 cells for the quadratic kernel) before its
+/// surface arrives. With "surface", a node inside the collider acts only once the material has reached the
+/// collider's surface there: a node of mass m is covered to the share f = m / (rho dx^3) of its support, which a
+/// flat material surface s cells beyond the node gives when f = F(s) (F the kernel's covered fraction); the
+/// material touches the wall at the node when s + phi / dx <= 0.
+struct SurfaceContact {
+    float cellMass = 0.0f;                 ///< rest density times dx^3; 0: the wall acts wherever the stencil reaches
+    double (*covered)(double) = nullptr;   ///< the kernel's covered fraction F(s), decreasing from 1 to 0
+    double halfWidth = 1.5;                ///< the kernel's half width [cells]
+    /// Whether a node of mass m at signed distance phi (cells) has the material at or past the wall.
+    bool touches(float m, double phiCells) const {
+        if (cellMass <= 0.0f) return true;
+        const double f = double(m) / double(cellMass);
+        // F is monotone: the surface lies beyond -phi (at or past the wall) iff F(-phi) <= f. Measured: allowing
+        // the surface a quarter cell short of the wall held a resting block better but brought early contact back.
+        return covered(-phiCells) <= f;
+    }
+};
+
 /// What one task of the grid update keeps for one collider between the leaves it visits (an accessor, a
 /// cache); analytic colliders keep nothing.
 struct ColliderContext {
@@ -100,7 +120,8 @@ public:
     /// Applies the boundary condition at time t to every node in `box` of a leaf with phi <= 0 and nonzero mass.
     /// A leaf whose centre lies farther from the surface than its half diagonal is skipped (phi is 1-Lipschitz).
     /// Returns the work a moving collider did on the nodes (its impulse times its velocity).
-    virtual double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context) const = 0;
+    virtual double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
+                               const SurfaceContact& surface) const = 0;
 
     /// What the particle pass did to one leaf's particles.
     struct ProjectionResult {

@@ -16,7 +16,7 @@ std::vector<std::unique_ptr<ColliderContext>> contextsFor(const std::vector<std:
 }  // namespace
 
 GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& g,
-                                      float dt, double tEnd, bool toVelocity) {
+                                      float dt, double tEnd, const SurfaceContact& surface, bool toVelocity) {
     return reduceLeafRanges(
         grid.leafCount(), LeafGrain::Nodes, GridUpdateResult{},
         [&](std::size_t begin, std::size_t end, GridUpdateResult& acc) {
@@ -33,7 +33,7 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
                         if (m != 0.0f) v = v / m + dt * g;
                         else v.setZero();
                     });
-                for (std::size_t c = 0; c < colliders.size(); ++c) acc.work += colliders[c]->applyToLeaf(leaf, box, grid.dx(), tEnd, contexts[c].get());
+                for (std::size_t c = 0; c < colliders.size(); ++c) acc.work += colliders[c]->applyToLeaf(leaf, box, grid.dx(), tEnd, contexts[c].get(), surface);
                 box.forEach([&](int n) {
                     if (leaf.mass[n] != 0.0f) acc.maxSpeed = std::max(acc.maxSpeed, Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm());
                 });

@@ -20,7 +20,7 @@ struct GridUpdateResult {
 /// With `toVelocity` false the nodes already hold velocities and only the colliders act (multi-field contact
 /// runs between the two).
 GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
-                                      float dt, double tEnd, bool toVelocity = true);
+                                      float dt, double tEnd, const SurfaceContact& surface, bool toVelocity = true);
 
 struct ProjectionSummary {
     double work = 0.0;      ///< work moving colliders did on the particles they moved

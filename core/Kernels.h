@@ -27,6 +27,14 @@ struct QuadraticBSpline {
         dw[1] = -2.0f * u1;
         dw[2] = u2;
     }
+    /// The share of a node's weight that material filling x > s (cells from the node, along one axis) carries:
+    /// the integral of N from s on; 1/2 when the material's surface passes through the node.
+    static double covered(double s) {
+        if (s < 0.0) return 1.0 - covered(-s);
+        if (s >= 1.5) return 0.0;
+        if (s >= 0.5) return (1.5 - s) * (1.5 - s) * (1.5 - s) / 6.0;
+        return 0.5 - 0.75 * s + s * s * s / 3.0;
+    }
 };
 
 /// Cubic B-spline, 4 nodes per axis, inertia tensor D_p = dx^2/3 I.
@@ -49,6 +57,13 @@ struct CubicBSpline {
         dw[1] = 1.5f * u1 * u1 - 2.0f * u1;
         dw[2] = -(1.5f * u2 * u2 - 2.0f * u2);
         dw[3] = 0.5f * b * b;
+    }
+    /// As QuadraticBSpline::covered.
+    static double covered(double s) {
+        if (s < 0.0) return 1.0 - covered(-s);
+        if (s >= 2.0) return 0.0;
+        if (s >= 1.0) return (2.0 - s) * (2.0 - s) * (2.0 - s) * (2.0 - s) / 24.0;
+        return 0.5 - s * s * s * s / 8.0 + s * s * s / 3.0 - 2.0 * s / 3.0;
     }
 };
 

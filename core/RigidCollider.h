@@ -82,7 +82,8 @@ public:
 
     std::unique_ptr<ColliderContext> makeContext() const override { return std::make_unique<Context>(geometry_); }
 
-    double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context) const override {
+    double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
+                       const SurfaceContact& surface) const override {
         if (box.empty()) return 0.0;
         typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
         const double halfDiagonal = std::sqrt(3.0) * 0.5 * (kLeafDim - 1) * dx;
@@ -109,6 +110,8 @@ public:
             const Vec3d rest = still ? x : pose.toRest(x);
             geometry_.phiNormal(rest, t, c, phi, normal);
             if (sign_ * phi > 0.0) return;
+            // A `separate` wall is unilateral contact: it acts once the material's surface has reached it.
+            if (boundary() == Boundary::Separate && !surface.touches(m, sign_ * phi / dx)) return;
             const Vec3f nWorld = still ? Vec3f((sign_ * normal).template cast<float>()) : Vec3f((sign_ * (pose.R * normal)).template cast<float>());
             const Vec3f vc = still ? Vec3f(Vec3f::Zero()) : Vec3f(velocityAt(x, rest, pose, rates, t, c).template cast<float>());
             Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);

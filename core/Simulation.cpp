@@ -288,18 +288,50 @@ void Simulation::bin() {
         });
 }
 
+SurfaceContact Simulation::surfaceContact() const {
+    SurfaceContact s;
+    if (settings_.wallContact != WallContact::Surface || colliders_.empty()) return s;
+    // The material's rest density, mass over rest volume over all particles (exact for one material).
+    double mass = 0.0, volume = 0.0;
+    for (const AnySpecies& sp : state_.species) {
+        const ParticleArrays& P = particlesOf(sp);
+        mass += tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, P.size(), kPermuteGrain), 0.0,
+            [&](const auto& r, double sum) {
+                for (std::size_t i = r.begin(); i < r.end(); ++i) sum += double(P.mass[i]);
+                return sum;
+            },
+            std::plus<double>());
+        volume += tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, P.size(), kPermuteGrain), 0.0,
+            [&](const auto& r, double sum) {
+                for (std::size_t i = r.begin(); i < r.end(); ++i) sum += double(P.volume0[i]);
+                return sum;
+            },
+            std::plus<double>());
+    }
+    if (!(volume > 0.0)) return s;
+    s.cellMass = float(mass / volume * std::pow(settings_.dx, 3));
+    withKernel(settings_.transfer.interpolation, [&]<class K>() {
+        s.covered = &K::covered;
+        s.halfWidth = 0.5 * K::kWidth;
+    });
+    return s;
+}
+
 GridUpdateResult Simulation::updateGrid(float dt) {
     for (const auto& c : colliders_) c->prepare(state_.time + dt);
     const Vec3f g = settings_.gravity.cast<float>();
     const double tEnd = state_.time + dt;
-    if (fields_.size() == 1) return updateGridVelocities(fields_[0], colliders_, g, dt, tEnd);
+    const SurfaceContact surface = surfaceContact();
+    if (fields_.size() == 1) return updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface);
     // Bodies of their own: velocities in every field, then the contact between them, then the colliders.
     static const std::vector<std::unique_ptr<Collider>> kNone;
-    for (const SparseGrid& field : fields_) updateGridVelocities(field, kNone, g, dt, tEnd);
+    for (const SparseGrid& field : fields_) updateGridVelocities(field, kNone, g, dt, tEnd, surface);
     resolveFieldContact(fields_, settings_.contactFriction);
     GridUpdateResult out;
     for (const SparseGrid& field : fields_) {
-        const GridUpdateResult r = updateGridVelocities(field, colliders_, g, dt, tEnd, false);
+        const GridUpdateResult r = updateGridVelocities(field, colliders_, g, dt, tEnd, surface, false);
         out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
         out.work += r.work;
     }

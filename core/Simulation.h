@@ -26,6 +26,8 @@ namespace mpm {
 /// How bodies in contact share the grid: one velocity field for all material (bodies that touch move
 /// together there), or one field per body with a contact condition between them (core/MultiField.h).
 enum class ContactModel { SingleField, MultiField };
+/// Where walls act: wherever the stencil reaches them, or at the material's surface (core/Collider.h SurfaceContact).
+enum class WallContact { Stencil, Surface };
 
 struct SimulationSettings {
     double dx = 0.02;                        ///< grid spacing [m]
@@ -40,6 +42,7 @@ struct SimulationSettings {
     StabilitySettings stability;
     ContactModel contact = ContactModel::SingleField;
     float contactFriction = 0.0f;  ///< Coulomb mu between bodies (multi_field)
+    WallContact wallContact = WallContact::Surface;  ///< for `separate` colliders (sticky and slip hold from the stencil's reach)
 
     double targetDt() const { return 1.0 / (fps * substepsPerFrame); }
 };
@@ -165,6 +168,8 @@ private:
     void checkCoordinates() const;
     void bin();
     GridUpdateResult updateGrid(float dt);
+    /// The wall-contact test of this substep (none unless simulation.wall_contact is "surface").
+    SurfaceContact surfaceContact() const;
     /// P2G, G2P and the particle pass of the colliders, field by field.
     void scatter(float dt);
     G2PSummary gather(float dt);

@@ -15,6 +15,7 @@ inline constexpr Named<Interpolation> kInterpolations[] = {{Interpolation::Quadr
                                                            {Interpolation::Cubic, "cubic"}};
 inline constexpr Named<TransferScheme> kTransfers[] = {{TransferScheme::APIC, "apic"}, {TransferScheme::PIC, "pic"}};
 inline constexpr Named<ForceScheme> kForces[] = {{ForceScheme::Standard, "standard"}, {ForceScheme::MLS, "mls"}};
+inline constexpr Named<WallContact> kWallContacts[] = {{WallContact::Stencil, "stencil"}, {WallContact::Surface, "surface"}};
 inline constexpr Named<ContactModel> kContactModels[] = {{ContactModel::SingleField, "single_field"},
                                                          {ContactModel::MultiField, "multi_field"}};
 inline constexpr Named<Boundary> kBoundaries[] = {
@@ -58,6 +59,12 @@ void simulationKeys(V& v, SceneDesc& d) {
              s.contact, std::span<const Named<ContactModel>>(kContactModels));
     v.number(Key{.name = "contact_friction", .help = "Coulomb friction between bodies (multi_field)", .lo = 0.0, .hi = 100.0},
              s.contactFriction);
+    v.choice(Key{.name = "wall_contact",
+                 .help = "where `separate` colliders act: surface (once the material's surface, judged from the node's mass, reaches "
+                         "theirs) or stencil (on every node inside them, from 1.5 cells before the material arrives); sticky and slip "
+                         "colliders hold material from the stencil's reach",
+                 .noun = "wall contact"},
+             s.wallContact, std::span<const Named<WallContact>>(kWallContacts));
     v.flag(Key{.name = "adaptive", .help = "apply the CFL bound (off: the fixed target dt)"}, s.adaptive);
     v.number(Key{.name = "max_displacement",
                  .help = "thesis rule: largest grid-node displacement per substep in cells; 0 = off",
