@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/Types.h"
 #include "sparse/LeafGeometry.h"
@@ -72,16 +73,15 @@ private:
     Patch patches_[kPatches];
 };
 
-/// Where a wall acts (simulation.wall_contact). By default, on every node inside the collider that has mass, so
-/// the wall reaches material up to the stencil's half width (1.5 cells for the quadratic kernel) before its
-/// surface arrives. With "surface", a node inside the collider acts only once the material has reached the
-/// collider's surface there: a node of mass m is covered to the share f = m / (rho dx^3) of its support, which a
+/// Where a `separate` wall acts (simulation.wall_contact). With "stencil", on every node inside the collider that
+/// has mass, so the wall reaches material up to the stencil's half width (1.5 cells for the quadratic kernel)
+/// before its surface arrives. With "surface" (the default), a node inside the collider acts only once the
+/// material has reached the collider's surface there: a node of mass m is covered to the share f = m / (rho dx^3) of its support, which a
 /// flat material surface s cells beyond the node gives when f = F(s) (F the kernel's covered fraction); the
 /// material touches the wall at the node when s + phi / dx <= 0.
 struct SurfaceContact {
     float cellMass = 0.0f;                 ///< rest density times dx^3; 0: the wall acts wherever the stencil reaches
     double (*covered)(double) = nullptr;   ///< the kernel's covered fraction F(s), decreasing from 1 to 0
-    double halfWidth = 1.5;                ///< the kernel's half width [cells]
     /// Whether a node of mass m at signed distance phi (cells) has the material at or past the wall.
     bool touches(float m, double phiCells) const {
         if (cellMass <= 0.0f) return true;
@@ -122,6 +122,17 @@ public:
     /// Returns the work a moving collider did on the nodes (its impulse times its velocity).
     virtual double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
                                const SurfaceContact& surface) const = 0;
+
+    /// A node inside the collider (phi < 0) with mass, for the mirror pass (simulation.wall_ghosts = "mirror"):
+    /// the node's mirror image across the surface, the outward normal and the collider's velocity at the surface.
+    struct Ghost {
+        int node;
+        Vec3d mirror;
+        Vec3f normal, velocity;
+    };
+    /// Appends the ghost nodes of a leaf at time t (none for a leaf far from the surface).
+    virtual void ghostsOfLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
+                              std::vector<Ghost>& out) const = 0;
 
     /// What the particle pass did to one leaf's particles.
     struct ProjectionResult {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "sparse/LeafLookup.h"
 #include "sparse/LeafParallel.h"
 
 namespace mpm {
@@ -44,6 +45,75 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
             a.work += b.work;
             return a;
         });
+}
+
+namespace {
+/// The velocity at a point from the nodes around it (trilinear, over the nodes with mass only); false where
+/// none of them has mass. A point on a node reads that node alone.
+bool velocityAt(const LeafLookup& lookup, const LeafView* near, const Vec3d& cells, Vec3f& v) {
+    constexpr double kOnNode = 1e-6;  // [cells]: an image this close to a node is that node (a wall on the grid)
+    const Vec3d base = cells.array().floor();
+    const Vec3d frac = cells - base;
+    float weightSum = 0.0f;
+    Vec3f sum = Vec3f::Zero();
+    for (int corner = 0; corner < 8; ++corner) {
+        float w = 1.0f;
+        Vec3i node;
+        for (int a = 0; a < 3; ++a) {
+            const bool up = (corner >> a) & 1;
+            double wa = up ? frac[a] : 1.0 - frac[a];
+            if (frac[a] < kOnNode) wa = up ? 0.0 : 1.0;
+            if (frac[a] > 1.0 - kOnNode) wa = up ? 1.0 : 0.0;
+            w *= float(wa);
+            node[a] = int(base[a]) + up;
+        }
+        if (w == 0.0f) continue;
+        int offset = 0;
+        const LeafView* leaf = lookup.at(node, near, offset);
+        if (!leaf || leaf->mass[offset] == 0.0f) continue;
+        weightSum += w;
+        sum += w * Eigen::Map<const Vec3f>(leaf->momentum + 3 * offset);
+    }
+    if (!(weightSum > 0.0f)) return false;
+    v = sum / weightSum;
+    return true;
+}
+}  // namespace
+
+std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd) {
+    bool any = false;
+    for (const auto& c : colliders) any = any || c->boundary() != Boundary::Separate;
+    if (!any) return 0;
+    const LeafLookup lookup(grid);
+    // Read every image first, then write: an image may lie next to another ghost.
+    std::vector<std::vector<std::pair<int, Vec3f>>> values(grid.leafCount());
+    const double invDx = 1.0 / grid.dx();
+    forEachLeafRange(grid.leafCount(), LeafGrain::Nodes, [&](std::size_t begin, std::size_t end) {
+        const auto contexts = contextsFor(colliders);
+        std::vector<Collider::Ghost> ghosts;
+        for (std::size_t l = begin; l < end; ++l) {
+            const LeafView& leaf = grid.leaf(l);
+            for (std::size_t c = 0; c < colliders.size(); ++c) {
+                const Boundary b = colliders[c]->boundary();
+                if (b == Boundary::Separate) continue;
+                ghosts.clear();
+                colliders[c]->ghostsOfLeaf(leaf, grid.writtenBox(l), grid.dx(), tEnd, contexts[c].get(), ghosts);
+                for (const Collider::Ghost& g : ghosts) {
+                    Vec3f image;
+                    if (!velocityAt(lookup, &leaf, g.mirror * invDx, image)) continue;
+                    const Vec3f rel = image - g.velocity;
+                    const Vec3f ghost = b == Boundary::Sticky ? Vec3f(g.velocity - rel) : Vec3f(g.velocity + rel - 2.0f * rel.dot(g.normal) * g.normal);
+                    values[l].emplace_back(g.node, ghost);
+                }
+            }
+        }
+    });
+    std::size_t mirrored = 0;
+    for (std::size_t l = 0; l < values.size(); ++l) {
+        for (const auto& [node, v] : values[l]) Eigen::Map<Vec3f>(grid.leaf(l).momentum + 3 * node) = v;
+        mirrored += values[l].size();
+    }
+    return mirrored;
 }
 
 ProjectionSummary projectOutOfColliders(const SparseGrid& grid, std::vector<AnySpecies>& species,

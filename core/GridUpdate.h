@@ -22,6 +22,15 @@ struct GridUpdateResult {
 GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
                                       float dt, double tEnd, const SurfaceContact& surface, bool toVelocity = true);
 
+/// Ghost nodes (simulation.wall_ghosts = "mirror"): after the colliders, every node with mass inside a sticky or
+/// slip collider takes the velocity mirrored from its image across the surface, odd about the wall's velocity
+/// (sticky) or odd in the normal part and even in the tangential (slip), instead of being held at the wall's:
+/// the velocity field the first particle layer interpolates then meets the wall at the surface itself, not a
+/// fraction of a cell beyond. Only nodes whose image holds material are mirrored (the others stay held), so a
+/// body arriving at a wall meets the held condition. The images are read before any ghost is written.
+/// Returns the number of nodes mirrored.
+std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd);
+
 struct ProjectionSummary {
     double work = 0.0;      ///< work moving colliders did on the particles they moved
     float maxSpeed = 0.0f;  ///< of those particles

@@ -1,54 +1,14 @@
 #include "core/MultiField.h"
 
-#include <cstdint>
-#include <unordered_map>
-
+#include "sparse/LeafLookup.h"
 #include "sparse/LeafParallel.h"
 
 namespace mpm {
 
 namespace {
 
-struct OriginHash {
-    std::size_t operator()(const Vec3i& o) const {
-        uint64_t h = uint64_t(uint32_t(o[0])) * 0x9E3779B97F4A7C15ull;
-        h ^= uint64_t(uint32_t(o[1])) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
-        h ^= uint64_t(uint32_t(o[2])) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
-        return std::size_t(h);
-    }
-};
-using LeafIndex = std::unordered_map<Vec3i, uint32_t, OriginHash>;
-
-/// The origin of the leaf holding a node (floor to a multiple of the leaf size, negative coordinates too).
-Vec3i leafOriginOf(const Vec3i& node) { return Vec3i(node[0] & ~(kLeafDim - 1), node[1] & ~(kLeafDim - 1), node[2] & ~(kLeafDim - 1)); }
-
-/// One field's leaves by origin, for the lookups of shared nodes and of the mass gradient's neighbours.
-class FieldLookup {
-public:
-    explicit FieldLookup(const SparseGrid& grid) : grid_(&grid) {
-        index_.reserve(grid.leafCount());
-        for (std::size_t l = 0; l < grid.leafCount(); ++l) index_.emplace(grid.leaf(l).origin, uint32_t(l));
-    }
-    const LeafView* find(const Vec3i& origin) const {
-        const auto it = index_.find(origin);
-        return it == index_.end() ? nullptr : &grid_->leaf(it->second);
-    }
-    /// Mass at a node (zero where the field has no leaf: nothing of it reaches there).
-    float massAt(const Vec3i& node, const LeafView* near) const {
-        const Vec3i o = leafOriginOf(node);
-        const LeafView* leaf = near && near->origin == o ? near : find(o);
-        if (!leaf) return 0.0f;
-        const Vec3i l = node - o;
-        return leaf->mass[leafOffset(l[0], l[1], l[2])];
-    }
-
-private:
-    const SparseGrid* grid_;
-    LeafIndex index_;
-};
-
 /// Central difference of a field's node masses (the direction is all that is used; the spacing drops out).
-Vec3f massGradient(const FieldLookup& field, const Vec3i& node, const LeafView* leaf) {
+Vec3f massGradient(const LeafLookup& field, const Vec3i& node, const LeafView* leaf) {
     Vec3f g;
     for (int a = 0; a < 3; ++a) {
         Vec3i up = node, down = node;
@@ -65,7 +25,7 @@ FieldContactSummary resolveFieldContact(std::vector<SparseGrid>& fields, float f
     const std::size_t F = fields.size();
     FieldContactSummary total;
     if (F < 2) return total;
-    std::vector<FieldLookup> lookup;
+    std::vector<LeafLookup> lookup;
     lookup.reserve(F);
     for (const SparseGrid& g : fields) lookup.emplace_back(g);
     for (std::size_t f = 0; f < F; ++f) {

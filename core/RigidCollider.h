@@ -145,6 +145,33 @@ public:
         return work;
     }
 
+    void ghostsOfLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
+                      std::vector<Ghost>& out) const override {
+        if (box.empty()) return;
+        typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
+        const double halfDiagonal = std::sqrt(3.0) * 0.5 * (kLeafDim - 1) * dx;
+        const Vec3d centre = (leaf.origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
+        const Pose pose = motion_.at(t);
+        const Motion::Rates rates = motion_.ratesAt(t);
+        const bool still = !moving();
+        if (skip(still ? centre : pose.toRest(centre), t, c, halfDiagonal)) return;
+        box.forEach([&](int n) {
+            if (leaf.mass[n] == 0.0f) return;
+            const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
+            double phi;
+            Vec3d normal;
+            const Vec3d rest = still ? x : pose.toRest(x);
+            geometry_.phiNormal(rest, t, c, phi, normal);
+            phi *= sign_;
+            if (phi >= 0.0) return;
+            const Vec3d nWorld = still ? Vec3d(sign_ * normal) : Vec3d(sign_ * (pose.R * normal));
+            const Vec3d surface = x - phi * nWorld;
+            const Vec3f vc = still ? Vec3f(Vec3f::Zero())
+                                   : Vec3f(velocityAt(surface, pose.toRest(surface), pose, rates, t, c).template cast<float>());
+            out.push_back({n, x - 2.0 * phi * nWorld, nWorld.template cast<float>(), vc});
+        });
+    }
+
     ProjectionResult projectParticles(ParticleArrays& P, uint32_t begin, uint32_t end, const Vec3i& leafOrigin, double dx, double t,
                                       float dt, const Vec3d& gravity, ColliderContext* context) const override {
         ProjectionResult out;

@@ -108,6 +108,7 @@ void Simulation::restore(SimState state) {
         if (state.species[s].index() != state_.species[s].index())
             throw std::invalid_argument("restore: species " + std::to_string(s) + " has another material");
     state_ = std::move(state);
+    restDensityCount_ = ~std::size_t(0);
 }
 
 std::size_t Simulation::particleCount() const {
@@ -288,34 +289,27 @@ void Simulation::bin() {
         });
 }
 
-SurfaceContact Simulation::surfaceContact() const {
+SurfaceContact Simulation::surfaceContact() {
     SurfaceContact s;
-    if (settings_.wallContact != WallContact::Surface || colliders_.empty()) return s;
-    // The material's rest density, mass over rest volume over all particles (exact for one material).
-    double mass = 0.0, volume = 0.0;
-    for (const AnySpecies& sp : state_.species) {
-        const ParticleArrays& P = particlesOf(sp);
-        mass += tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, P.size(), kPermuteGrain), 0.0,
-            [&](const auto& r, double sum) {
-                for (std::size_t i = r.begin(); i < r.end(); ++i) sum += double(P.mass[i]);
-                return sum;
-            },
-            std::plus<double>());
-        volume += tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, P.size(), kPermuteGrain), 0.0,
-            [&](const auto& r, double sum) {
-                for (std::size_t i = r.begin(); i < r.end(); ++i) sum += double(P.volume0[i]);
-                return sum;
-            },
-            std::plus<double>());
+    if (settings_.wallContact != WallContact::Surface) return s;
+    bool unilateral = false;
+    for (const auto& c : colliders_) unilateral = unilateral || c->boundary() == Boundary::Separate;
+    if (!unilateral) return s;
+    // The material's rest density, mass over rest volume over all particles (exact for one material); it
+    // changes only when particles are added, so it is measured again only then.
+    const std::size_t count = particleCount();
+    if (count != restDensityCount_) {
+        double mass = 0.0, volume = 0.0;
+        for (const AnySpecies& sp : state_.species) {
+            const ParticleArrays& P = particlesOf(sp);
+            for (std::size_t i = 0; i < P.size(); ++i) mass += double(P.mass[i]), volume += double(P.volume0[i]);
+        }
+        restDensity_ = volume > 0.0 ? mass / volume : 0.0;
+        restDensityCount_ = count;
     }
-    if (!(volume > 0.0)) return s;
-    s.cellMass = float(mass / volume * std::pow(settings_.dx, 3));
-    withKernel(settings_.transfer.interpolation, [&]<class K>() {
-        s.covered = &K::covered;
-        s.halfWidth = 0.5 * K::kWidth;
-    });
+    if (!(restDensity_ > 0.0)) return s;
+    s.cellMass = float(restDensity_ * std::pow(settings_.dx, 3));
+    withKernel(settings_.transfer.interpolation, [&]<class K>() { s.covered = &K::covered; });
     return s;
 }
 
@@ -324,7 +318,12 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     const Vec3f g = settings_.gravity.cast<float>();
     const double tEnd = state_.time + dt;
     const SurfaceContact surface = surfaceContact();
-    if (fields_.size() == 1) return updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface);
+    const bool mirror = settings_.wallGhosts == WallGhosts::Mirror;
+    if (fields_.size() == 1) {
+        const GridUpdateResult r = updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface);
+        if (mirror) mirrorGhostNodes(fields_[0], colliders_, tEnd);
+        return r;
+    }
     // Bodies of their own: velocities in every field, then the contact between them, then the colliders.
     static const std::vector<std::unique_ptr<Collider>> kNone;
     for (const SparseGrid& field : fields_) updateGridVelocities(field, kNone, g, dt, tEnd, surface);
@@ -332,6 +331,7 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     GridUpdateResult out;
     for (const SparseGrid& field : fields_) {
         const GridUpdateResult r = updateGridVelocities(field, colliders_, g, dt, tEnd, surface, false);
+        if (mirror) mirrorGhostNodes(field, colliders_, tEnd);
         out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
         out.work += r.work;
     }

@@ -28,6 +28,9 @@ namespace mpm {
 enum class ContactModel { SingleField, MultiField };
 /// Where walls act: wherever the stencil reaches them, or at the material's surface (core/Collider.h SurfaceContact).
 enum class WallContact { Stencil, Surface };
+/// What nodes inside a sticky or slip wall hold: the wall's velocity, or the velocity mirrored from their image
+/// across the surface (core/GridUpdate.h mirrorGhostNodes).
+enum class WallGhosts { Held, Mirror };
 
 struct SimulationSettings {
     double dx = 0.02;                        ///< grid spacing [m]
@@ -42,6 +45,7 @@ struct SimulationSettings {
     StabilitySettings stability;
     ContactModel contact = ContactModel::SingleField;
     float contactFriction = 0.0f;  ///< Coulomb mu between bodies (multi_field)
+    WallGhosts wallGhosts = WallGhosts::Held;
     WallContact wallContact = WallContact::Surface;  ///< for `separate` colliders (sticky and slip hold from the stencil's reach)
 
     double targetDt() const { return 1.0 / (fps * substepsPerFrame); }
@@ -169,7 +173,7 @@ private:
     void bin();
     GridUpdateResult updateGrid(float dt);
     /// The wall-contact test of this substep (none unless simulation.wall_contact is "surface").
-    SurfaceContact surfaceContact() const;
+    SurfaceContact surfaceContact();
     /// P2G, G2P and the particle pass of the colliders, field by field.
     void scatter(float dt);
     G2PSummary gather(float dt);
@@ -191,6 +195,8 @@ private:
     std::vector<SparseGrid> fields_;                 ///< velocity fields: one, or one per body
     std::vector<std::vector<int>> fieldSpecies_;     ///< per field, its species
     std::vector<AnySpecies> fieldScratch_;           ///< a field's species while its transfers run
+    double restDensity_ = 0.0;                       ///< of all particles, for SurfaceContact
+    std::size_t restDensityCount_ = ~std::size_t(0);  ///< the particle count it was measured at
     std::vector<std::vector<uint32_t>> destination_;  ///< per species: sorted slot of each particle
     std::vector<std::byte> scratch_;                  ///< permutation buffer, shared by every particle array
     // Policy and timings.

@@ -15,6 +15,7 @@ inline constexpr Named<Interpolation> kInterpolations[] = {{Interpolation::Quadr
                                                            {Interpolation::Cubic, "cubic"}};
 inline constexpr Named<TransferScheme> kTransfers[] = {{TransferScheme::APIC, "apic"}, {TransferScheme::PIC, "pic"}};
 inline constexpr Named<ForceScheme> kForces[] = {{ForceScheme::Standard, "standard"}, {ForceScheme::MLS, "mls"}};
+inline constexpr Named<WallGhosts> kWallGhosts[] = {{WallGhosts::Held, "held"}, {WallGhosts::Mirror, "mirror"}};
 inline constexpr Named<WallContact> kWallContacts[] = {{WallContact::Stencil, "stencil"}, {WallContact::Surface, "surface"}};
 inline constexpr Named<ContactModel> kContactModels[] = {{ContactModel::SingleField, "single_field"},
                                                          {ContactModel::MultiField, "multi_field"}};
@@ -59,6 +60,11 @@ void simulationKeys(V& v, SceneDesc& d) {
              s.contact, std::span<const Named<ContactModel>>(kContactModels));
     v.number(Key{.name = "contact_friction", .help = "Coulomb friction between bodies (multi_field)", .lo = 0.0, .hi = 100.0},
              s.contactFriction);
+    v.choice(Key{.name = "wall_ghosts",
+                 .help = "nodes inside sticky and slip colliders: held at the wall's velocity, or mirror (the velocity mirrored from "
+                         "their image across the surface, where that holds material: no soft layer at the wall)",
+                 .noun = "wall ghosts"},
+             s.wallGhosts, std::span<const Named<WallGhosts>>(kWallGhosts));
     v.choice(Key{.name = "wall_contact",
                  .help = "where `separate` colliders act: surface (once the material's surface, judged from the node's mass, reaches "
                          "theirs) or stencil (on every node inside them, from 1.5 cells before the material arrives); sticky and slip "

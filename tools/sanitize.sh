@@ -16,5 +16,5 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # The scene-length tests (each over 3 s in Release, 30 s to 7 min here) run the same kernels, readers and writers
 # as the short ones; under the sanitizers they would take most of CI's time, so they run in Release only.
 slow='^(SceneChecks|Validation|MovingCollider)\.|^Safety\.(Killed|Signals|ACorrupt|FramesAToB|OneRunPerDirectory)|'
-slow+='^MeshCollider\.WaterAtRest|^VdbCollider\.ARising|^Cli\.ValidateShipped|^RigidRotation\.Apic|^ContinuousSource\.Resuming'
+slow+='^MultiField\.(TwoElastic|ABlock)|^MeshCollider\.WaterAtRest|^VdbCollider\.ARising|^Cli\.ValidateShipped|^RigidRotation\.Apic|^ContinuousSource\.Resuming'
 ctest --test-dir "$build" -L unit -E "$slow" --output-on-failure -j2
