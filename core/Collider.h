@@ -117,8 +117,9 @@ public:
     virtual void prepare(double /*t*/) {}
     /// A context for one task; the default is none.
     virtual std::unique_ptr<ColliderContext> makeContext() const { return nullptr; }
-    /// Applies the boundary condition at time t to every node in `box` of a leaf with phi <= 0 and nonzero mass.
-    /// A leaf whose centre lies farther from the surface than its half diagonal is skipped (phi is 1-Lipschitz).
+    /// Applies the boundary condition at time t to every node in `box` of a leaf with phi <= 0 and nonzero mass
+    /// (for a `separate` wall, only where `surface` says the material has reached it), with Coulomb friction per
+    /// contact patch (FrictionPatches). A leaf whose centre lies farther from the surface than its half diagonal is skipped (phi is 1-Lipschitz).
     /// Returns the work a moving collider did on the nodes (its impulse times its velocity).
     virtual double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
                                const SurfaceContact& surface) const = 0;
