@@ -21,11 +21,12 @@ struct Slope {
     bool gridAligned = false;  ///< flat floor, gravity tilted; otherwise a tilted plane under vertical gravity
 };
 
-/// When the friction cases measure the block: after the drop onto the plane has rung down (about 4 periods
-/// of the block's lowest vertical mode), to the end.
-constexpr double kSettled = 0.1, kSlideEnd = 0.5;
+/// When the friction cases measure the block: after the release has rung down (about 4 periods of the block's
+/// lowest vertical mode), to the end, sampled every kSample seconds.
+constexpr double kSettled = 0.1, kSlideEnd = 0.5, kSample = 0.01;
 
-// 9. Friction on a slope: a jelly block (E = 2e5 Pa, 0.2 x 0.1 x 0.1 m) released at rest. A rigid block's answer:
+// 9. Friction on a slope: a jelly block (E = 2e5 Pa, 0.2 x 0.1 x 0.1 m) released at rest in its static stress
+// state. A rigid block's answer:
 // it stays put when mu >= tan(theta), and otherwise slides with a = g (sin(theta) - mu cos(theta)).
 CaseResult slide(const CaseConfig& c, const Slope& k) {
     const double theta = k.thetaDegrees * M_PI / 180.0, g = 9.81;
@@ -71,8 +72,7 @@ CaseResult slide(const CaseConfig& c, const Slope& k) {
     double wall = runUntil(sim, kSettled);
     const double d0 = along().first;
     std::vector<double> t, v;
-    const double dt = 0.01;
-    for (double at = kSettled + dt; at <= kSlideEnd + 1e-9; at += dt) {
+    for (double at = kSettled + kSample; at <= kSlideEnd + 1e-9; at += kSample) {
         wall += runUntil(sim, at);
         t.push_back(sim.time());
         v.push_back(along().second);
@@ -95,7 +95,7 @@ constexpr double kCollisionEnd = 0.2;
 
 // 10. Two elastic spheres collide head on (jelly, E = 1e5 Pa, R = 0.08 m, 0.5 m/s each, no gravity): an
 // elastic collision keeps the energy, which ends as the spheres' rebound and their ringing. Error: the share of
-// kinetic plus stored energy lost by the end; the spheres must have parted (moving apart, no node shared).
+// kinetic plus stored energy lost by the end; the spheres must have parted (their centroids moving apart).
 CaseResult twoSpheres(const CaseConfig& c, ContactModel model) {
     Setup s = load("two_spheres", c, -1.0, [&](SceneDesc& d) { d.settings.contact = model; });
     Simulation& sim = *s.sim;
