@@ -86,12 +86,9 @@ public:
                        const SurfaceContact& surface) const override {
         if (box.empty()) return 0.0;
         typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
-        const double halfDiagonal = std::sqrt(3.0) * 0.5 * (kLeafDim - 1) * dx;
-        const Vec3d centre = (leaf.origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
-        const Pose pose = motion_.at(t);
-        const Motion::Rates rates = motion_.ratesAt(t);
-        const bool still = !moving();
-        if (skip(still ? centre : pose.toRest(centre), t, c, halfDiagonal)) return 0.0;
+        Frame f;
+        if (!frameNear(leaf.origin, dx, t, c, nodeReach(dx), f)) return 0.0;
+        const bool still = f.still;
         // The normal condition node by node; Coulomb friction after, patch by patch (FrictionPatches).
         struct Pressed {
             int node;
@@ -105,15 +102,14 @@ public:
             const float m = leaf.mass[n];
             if (m == 0.0f) return;
             const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
+            Vec3d rest, normal;
             double phi;
-            Vec3d normal;
-            const Vec3d rest = still ? x : pose.toRest(x);
-            geometry_.phiNormal(rest, t, c, phi, normal);
-            if (sign_ * phi > 0.0) return;
+            nodeDistance(x, f, t, c, rest, phi, normal);
+            if (phi > 0.0) return;
             // A `separate` wall is unilateral contact: it acts once the material's surface has reached it.
-            if (boundary() == Boundary::Separate && !surface.touches(m, sign_ * phi / dx)) return;
-            const Vec3f nWorld = still ? Vec3f((sign_ * normal).template cast<float>()) : Vec3f((sign_ * (pose.R * normal)).template cast<float>());
-            const Vec3f vc = still ? Vec3f(Vec3f::Zero()) : Vec3f(velocityAt(x, rest, pose, rates, t, c).template cast<float>());
+            if (boundary() == Boundary::Separate && !surface.touches(m, phi / dx)) return;
+            const Vec3f nWorld = normal.template cast<float>();
+            const Vec3f vc = still ? Vec3f(Vec3f::Zero()) : Vec3f(velocityAt(x, rest, f.pose, f.rates, t, c).template cast<float>());
             Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
             const Vec3f before = v;
             if (boundary() == Boundary::Sticky) {
@@ -149,26 +145,19 @@ public:
                       std::vector<Ghost>& out) const override {
         if (box.empty()) return;
         typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
-        const double halfDiagonal = std::sqrt(3.0) * 0.5 * (kLeafDim - 1) * dx;
-        const Vec3d centre = (leaf.origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
-        const Pose pose = motion_.at(t);
-        const Motion::Rates rates = motion_.ratesAt(t);
-        const bool still = !moving();
-        if (skip(still ? centre : pose.toRest(centre), t, c, halfDiagonal)) return;
+        Frame f;
+        if (!frameNear(leaf.origin, dx, t, c, nodeReach(dx), f)) return;
         box.forEach([&](int n) {
             if (leaf.mass[n] == 0.0f) return;
             const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
+            Vec3d rest, normal;
             double phi;
-            Vec3d normal;
-            const Vec3d rest = still ? x : pose.toRest(x);
-            geometry_.phiNormal(rest, t, c, phi, normal);
-            phi *= sign_;
+            nodeDistance(x, f, t, c, rest, phi, normal);
             if (phi >= 0.0) return;
-            const Vec3d nWorld = still ? Vec3d(sign_ * normal) : Vec3d(sign_ * (pose.R * normal));
-            const Vec3d surface = x - phi * nWorld;
-            const Vec3f vc = still ? Vec3f(Vec3f::Zero())
-                                   : Vec3f(velocityAt(surface, pose.toRest(surface), pose, rates, t, c).template cast<float>());
-            out.push_back({n, x - 2.0 * phi * nWorld, nWorld.template cast<float>(), vc});
+            const Vec3d surface = x - phi * normal;
+            const Vec3f vc = f.still ? Vec3f(Vec3f::Zero())
+                                     : Vec3f(velocityAt(surface, f.pose.toRest(surface), f.pose, f.rates, t, c).template cast<float>());
+            out.push_back({n, x - 2.0 * phi * normal, normal.template cast<float>(), vc});
         });
     }
 
@@ -178,12 +167,11 @@ public:
         if (begin == end) return out;
         typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
         // The particles of a leaf lie within its base nodes' box grown by the stencil and a substep's travel.
-        const double halfDiagonal = colliderReach(dx);
-        const Vec3d centre = (leafOrigin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
-        const Pose pose = motion_.at(t);
-        const Motion::Rates rates = motion_.ratesAt(t);
-        const bool still = !moving();
-        if (skip(still ? centre : pose.toRest(centre), t, c, halfDiagonal)) return out;
+        Frame f;
+        if (!frameNear(leafOrigin, dx, t, c, colliderReach(dx), f)) return out;
+        const Pose& pose = f.pose;
+        const Motion::Rates& rates = f.rates;
+        const bool still = f.still;
         const double thinnest = geometry_.thinnest();
         for (uint32_t p = begin; p < end; ++p) {
             Vec3d& x = P.x[p];
@@ -230,6 +218,29 @@ public:
     }
 
 private:
+    /// The collider's pose and rates at one time, as a pass over one leaf needs them.
+    struct Frame {
+        Pose pose;
+        Motion::Rates rates;
+        bool still;
+    };
+    /// How far from a leaf's centre a node of it lies at most: half the leaf's diagonal.
+    static double nodeReach(double dx) { return std::sqrt(3.0) * 0.5 * (kLeafDim - 1) * dx; }
+    /// The frame at t; false when nothing within `reach` of the leaf's centre can touch the collider.
+    bool frameNear(const Vec3i& origin, double dx, double t, typename Geometry::Context& c, double reach, Frame& f) const {
+        f = Frame{motion_.at(t), motion_.ratesAt(t), !moving()};
+        const Vec3d centre = (origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
+        return !skip(f.still ? centre : f.pose.toRest(centre), t, c, reach);
+    }
+    /// A node's rest-frame position, its signed distance (positive on the material's side) and the outward
+    /// normal in world axes.
+    void nodeDistance(const Vec3d& x, const Frame& f, double t, typename Geometry::Context& c, Vec3d& rest, double& phi,
+                      Vec3d& normal) const {
+        rest = f.still ? x : f.pose.toRest(x);
+        geometry_.phiNormal(rest, t, c, phi, normal);
+        phi *= sign_;
+        normal = f.still ? Vec3d(sign_ * normal) : Vec3d(sign_ * (f.pose.R * normal));
+    }
     /// Whether nothing within `reach` of a leaf centre can touch the collider: phi is 1-Lipschitz, so a
     /// distance larger than the reach says so; and beyond a level set's band, its coarse mask does.
     bool skip(const Vec3d& centreRest, double t, typename Geometry::Context& c, double reach) const {
