@@ -99,12 +99,18 @@ struct Progress {
 };
 
 int run(const std::string& scenePath, const RunOptions& options, int threads, bool quiet) {
+    // On several ranks rank 0 speaks for all of them.
+    const Comm& comm = Comm::world();
+    const bool speaks = comm.rank() == 0;
+    quiet = quiet || !speaks;
     Progress progress{quiet, ::isatty(STDERR_FILENO) && !quiet};
     RunEvents events;
     events.note = [&](const std::string& s) {
         if (!quiet) std::fprintf(stderr, "mpm: %s\n", s.c_str());
     };
-    events.warning = [&](const std::string& s) { std::fprintf(stderr, "mpm: warning: %s\n", s.c_str()); };
+    events.warning = [&](const std::string& s) {
+        if (speaks) std::fprintf(stderr, "mpm: warning: %s\n", s.c_str());
+    };
     events.frameDone = [&](int f, int last, const FrameStats& st, double w) { progress.frame(f, last, st, w); };
     // The scene's thread count is known only once it is read; the limit must be in place before any work.
     const SceneDesc peek = loadScene(scenePath);
@@ -114,15 +120,17 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
     SceneRun job(scenePath, options, events);
     progress.firstFrame = job.startFrame();
     if (!quiet)
-        std::fprintf(stderr, "mpm: %s, frames %d to %d at %g fps, dx %g m, %d threads -> %s\n", scenePath.c_str(), job.startFrame() + 1,
-                     job.lastFrame(), job.scene().settings.fps, job.scene().settings.dx, nThreads, job.directory().c_str());
+        std::fprintf(stderr, "mpm: %s, frames %d to %d at %g fps, dx %g m, %d rank%s x %d threads -> %s\n", scenePath.c_str(),
+                     job.startFrame() + 1, job.lastFrame(), job.scene().settings.fps, job.scene().settings.dx, comm.size(),
+                     comm.size() == 1 ? "" : "s", nThreads, job.directory().c_str());
     try {
         job.run(&gStopSignal);
     } catch (const Interrupted&) {
         const int sig = gStopSignal.load();
-        std::fprintf(stderr, "%smpm: stopped by %s at frame %d (t = %g s); the state is in %s\nmpm: resume with: mpm run %s -o %s --resume\n",
-                     progress.tty ? "\n" : "", sig == SIGTERM ? "SIGTERM" : "SIGINT", job.simulation().frame(), job.simulation().time(),
-                     job.lastCheckpoint().c_str(), scenePath.c_str(), job.directory().c_str());
+        if (speaks)
+            std::fprintf(stderr, "%smpm: stopped by %s at frame %d (t = %g s); the state is in %s\nmpm: resume with: mpm run %s -o %s --resume\n",
+                         progress.tty ? "\n" : "", sig == SIGTERM ? "SIGTERM" : "SIGINT", job.simulation().frame(), job.simulation().time(),
+                         job.lastCheckpoint().c_str(), scenePath.c_str(), job.directory().c_str());
         return kExitSignalBase + (sig ? sig : SIGINT);
     }
     if (progress.tty) std::fprintf(stderr, "\n");
@@ -152,7 +160,33 @@ int validate(const std::string& scenePath, bool strict) {
 
 }  // namespace
 
+namespace {
+int cli(int argc, char** argv);
+}
+
 int main(int argc, char** argv) {
+    // Under mpirun every rank runs this program; alone it is one rank.
+    Comm::start(&argc, &argv);
+    const int rc = cli(argc, argv);
+    Comm::finish();
+    return rc;
+}
+
+namespace {
+
+/// Prints an error once (rank 0) for a failure every rank met; one only this rank met ends all of them.
+int fail(int code, const char* format, const char* what, bool everyRank = true) {
+    const Comm& comm = Comm::world();
+    if (!everyRank && comm.distributed()) {
+        std::fprintf(stderr, "error: rank %d of %d: ", comm.rank(), comm.size());
+        std::fprintf(stderr, format, what);
+        comm.abort(code);
+    }
+    if (comm.rank() == 0) std::fprintf(stderr, format, what);
+    return code;
+}
+
+int cli(int argc, char** argv) {
     CLI::App app{"Sparse-grid Material Point Method simulator (OpenVDB grid, APIC, oneTBB)"};
     app.require_subcommand(1);
     std::string scenePath, outDir, frames;
@@ -196,25 +230,20 @@ int main(int argc, char** argv) {
         options.force = force;
         return run(scenePath, parseFrames(frames, options), threads, quiet);
     } catch (const SceneError& e) {
-        std::fprintf(stderr, "error: %s\n", e.what());
-        return kExitBadInput;
+        return fail(kExitBadInput, "error: %s\n", e.what());
     } catch (const LockError& e) {
-        std::fprintf(stderr, "error: %s\n", e.what());
-        return kExitBadInput;
+        return fail(kExitBadInput, "error: %s\n", e.what());
     } catch (const SimulationError& e) {
-        std::fprintf(stderr, "\nerror: simulation stopped: %s (nothing of that frame was written)\n", e.what());
-        return kExitRunFailed;
+        return fail(kExitRunFailed, "\nerror: simulation stopped: %s (nothing of that frame was written)\n", e.what());
     } catch (const LimitExceeded& e) {
-        std::fprintf(stderr, "\nerror: simulation stopped: %s\n", e.what());
-        return kExitRunFailed;
+        return fail(kExitRunFailed, "\nerror: simulation stopped: %s\n", e.what());
     } catch (const WriteError& e) {
-        std::fprintf(stderr, "\nerror: cannot write %s (earlier files are intact)\n", e.what());
-        return kExitRunFailed;
+        return fail(kExitRunFailed, "\nerror: cannot write %s (earlier files are intact)\n", e.what());
     } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "\nerror: out of memory\n");
-        return kExitRunFailed;
+        return fail(kExitRunFailed, "\nerror: %s\n", "out of memory", false);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "\nerror: %s\n", e.what());
-        return kExitRunFailed;
+        return fail(kExitRunFailed, "\nerror: %s\n", e.what(), false);
     }
 }
+
+}  // namespace

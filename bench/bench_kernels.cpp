@@ -49,7 +49,7 @@ struct KernelScene {
         withKernel(kernel, [&]<class K>() { grid.configure(kDx, K::kBaseShift, K::kWidth); });
         destination.resize(species.size());
         for (std::size_t s = 0; s < species.size(); ++s)
-            std::visit([&](auto& sp) { requests.push_back(BinRequest{&sp.p.x, &destination[s], &sp.leafStart}); }, species[s]);
+            std::visit([&](auto& sp) { requests.push_back(BinRequest{&sp.p.x, &sp.p.id, &destination[s], &sp.leafStart}); }, species[s]);
         grid.rebuild(requests);
         colliders.push_back(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, 0.0f));
         particlesToGrid(grid, species, transfer, dt);

@@ -11,77 +11,78 @@ namespace mpm {
 
 namespace {
 constexpr std::size_t kReduceGrain = 8192;
-
-struct Sums {
-    double mass = 0, ke = 0, pe = 0, ge = 0, vmax = 0;
-    Vec3d p = Vec3d::Zero(), L = Vec3d::Zero();
-    double minJ = std::numeric_limits<double>::infinity(), maxJ = -std::numeric_limits<double>::infinity();
-    Sums operator+(const Sums& o) const {
-        Sums s;
-        s.mass = mass + o.mass;
-        s.ke = ke + o.ke;
-        s.pe = pe + o.pe;
-        s.ge = ge + o.ge;
-        s.vmax = std::max(vmax, o.vmax);
-        s.p = p + o.p;
-        s.L = L + o.L;
-        s.minJ = std::min(minJ, o.minJ);
-        s.maxJ = std::max(maxJ, o.maxJ);
-        return s;
-    }
-};
+enum Sum { kMass, kKinetic, kElastic, kGravity, kMomentum, kAngular = kMomentum + 3 };
+static_assert(kAngular + 3 == ParticleSums::kSums);
 }  // namespace
 
-FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale, const Vec3d& gravity) {
-    Sums total;
+void ParticleSums::add(const ParticleSums& o) {
+    for (int k = 0; k < kSums; ++k) sum[k] += o.sum[k];
+    maxSpeed = std::max(maxSpeed, o.maxSpeed);
+    minJ = std::min(minJ, o.minJ);
+    maxJ = std::max(maxJ, o.maxJ);
+    particles += o.particles;
+}
+
+ParticleSums sumParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale, const Vec3d& gravity) {
+    ParticleSums total;
     const double D = inertiaScale * dx * dx;
     for (const AnySpecies& s : species) {
-        total = total + std::visit(
-                            [&](const auto& sp) {
-                                using M = typename std::decay_t<decltype(sp)>::Material;
-                                const ParticleArrays& P = sp.p;
-                                return tbb::parallel_deterministic_reduce(
-                                    tbb::blocked_range<std::size_t>(0, P.size(), kReduceGrain), Sums(),
-                                    [&](const tbb::blocked_range<std::size_t>& r, Sums acc) {
-                                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                                            const double m = P.mass[i];
-                                            const Vec3d v = P.v[i].cast<double>();
-                                            const Mat3d B = P.C[i].cast<double>() * D;
-                                            acc.mass += m;
-                                            acc.p += m * v;
-                                            acc.L += P.x[i].cross(m * v) +
-                                                     m * Vec3d(B(2, 1) - B(1, 2), B(0, 2) - B(2, 0), B(1, 0) - B(0, 1));
-                                            // APIC's kinetic energy includes the affine part, 1/2 m D |C|^2 (B = C D): a spinning
-                                            // body keeps part of its energy there, and hands it to v when it flies apart.
-                                            acc.ke +=
-                                                0.5 * m * (v.squaredNorm() + (B.array() * P.C[i].cast<double>().array()).sum());
-                                            acc.pe += P.volume0[i] * M::energyDensity(sp.params, sp.state, i);
-                                            acc.ge -= m * gravity.dot(P.x[i]);
-                                            acc.vmax = std::max(acc.vmax, v.norm());
-                                            const double J = M::volumeRatio(sp.state, i);
-                                            acc.minJ = std::min(acc.minJ, J);
-                                            acc.maxJ = std::max(acc.maxJ, J);
-                                        }
-                                        return acc;
-                                    },
-                                    [](const Sums& a, const Sums& b) { return a + b; });
-                            },
-                            s);
+        total.add(std::visit(
+            [&](const auto& sp) {
+                using M = typename std::decay_t<decltype(sp)>::Material;
+                const ParticleArrays& P = sp.p;
+                return tbb::parallel_reduce(
+                    tbb::blocked_range<std::size_t>(0, P.size(), kReduceGrain), ParticleSums(),
+                    [&](const tbb::blocked_range<std::size_t>& r, ParticleSums acc) {
+                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                            const double m = P.mass[i];
+                            const Vec3d v = P.v[i].cast<double>();
+                            const Mat3d B = P.C[i].cast<double>() * D;
+                            const Vec3d p = m * v;
+                            const Vec3d L = P.x[i].cross(p) + m * Vec3d(B(2, 1) - B(1, 2), B(0, 2) - B(2, 0), B(1, 0) - B(0, 1));
+                            acc.sum[kMass] += m;
+                            for (int a = 0; a < 3; ++a) acc.sum[kMomentum + a] += p[a], acc.sum[kAngular + a] += L[a];
+                            // APIC's kinetic energy includes the affine part, 1/2 m D |C|^2 (B = C D): a spinning
+                            // body keeps part of its energy there, and hands it to v when it flies apart.
+                            acc.sum[kKinetic] += 0.5 * m * (v.squaredNorm() + (B.array() * P.C[i].cast<double>().array()).sum());
+                            acc.sum[kElastic] += P.volume0[i] * M::energyDensity(sp.params, sp.state, i);
+                            acc.sum[kGravity] += -m * gravity.dot(P.x[i]);
+                            acc.maxSpeed = std::max(acc.maxSpeed, v.norm());
+                            const double J = M::volumeRatio(sp.state, i);
+                            acc.minJ = std::min(acc.minJ, J);
+                            acc.maxJ = std::max(acc.maxJ, J);
+                        }
+                        acc.particles += r.size();
+                        return acc;
+                    },
+                    [](ParticleSums a, const ParticleSums& b) {
+                        a.add(b);
+                        return a;
+                    });
+            },
+            s));
     }
+    return total;
+}
+
+FrameStats ParticleSums::stats() const {
     FrameStats st;
-    for (const AnySpecies& s : species) st.particles += particlesOf(s).size();
-    st.mass = total.mass;
-    st.momentum = total.p;
-    st.angularMomentum = total.L;
-    st.kineticEnergy = total.ke;
-    st.elasticEnergy = total.pe;
-    st.gravityEnergy = total.ge;
-    st.maxSpeed = total.vmax;
-    if (st.particles) {
-        st.minJ = total.minJ;
-        st.maxJ = total.maxJ;
+    st.particles = particles;
+    st.mass = sum[kMass].value();
+    for (int a = 0; a < 3; ++a) st.momentum[a] = sum[kMomentum + a].value(), st.angularMomentum[a] = sum[kAngular + a].value();
+    st.kineticEnergy = sum[kKinetic].value();
+    st.elasticEnergy = sum[kElastic].value();
+    st.gravityEnergy = sum[kGravity].value();
+    st.maxSpeed = maxSpeed;
+    if (particles) {
+        st.minJ = minJ;
+        st.maxJ = maxJ;
     }
     return st;
+}
+
+FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale, const Vec3d& gravity) {
+    return sumParticles(species, dx, inertiaScale, gravity).stats();
 }
 
 std::string FrameStats::csvHeader() {

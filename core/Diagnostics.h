@@ -1,9 +1,11 @@
 #pragma once
 // Per-frame diagnostics: conservation quantities, energies, extremes, grid size (stats.csv).
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
+#include "core/ExactSum.h"
 #include "core/Species.h"
 
 namespace mpm {
@@ -38,8 +40,23 @@ struct FrameStats {
     std::string csvRow() const;
 };
 
-/// Sums over all particles. Deterministic: a fixed-grain reduction whose split does not depend on threads.
-/// inertiaScale is D_p / dx^2 (1/4 quadratic, 1/3 cubic), for the APIC angular momentum m eps : (C D)^T.
+/// The particle sums behind FrameStats, exact (core/ExactSum.h): the same bits whatever the split over
+/// threads or ranks, and those of several ranks add (Comm::sum).
+struct ParticleSums {
+    static constexpr int kSums = 10;  ///< mass, kinetic, elastic, gravity energy, momentum (3), angular momentum (3)
+    ExactSum sum[kSums];
+    double maxSpeed = 0.0;
+    double minJ = std::numeric_limits<double>::infinity(), maxJ = -std::numeric_limits<double>::infinity();
+    std::size_t particles = 0;
+    void add(const ParticleSums& o);
+    /// Mass, momenta, energies and extremes (frame, time and grid fields left for the caller).
+    FrameStats stats() const;
+};
+
+/// Sums over the particles held here. inertiaScale is D_p / dx^2 (1/4 quadratic, 1/3 cubic), for the APIC
+/// angular momentum m eps : (C D)^T.
+ParticleSums sumParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale, const Vec3d& gravity);
+/// sumParticles(...).stats().
 FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, float inertiaScale, const Vec3d& gravity);
 
 }  // namespace mpm

@@ -17,12 +17,14 @@ std::vector<std::unique_ptr<ColliderContext>> contextsFor(const std::vector<std:
 }  // namespace
 
 GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& g,
-                                      float dt, double tEnd, const SurfaceContact& surface, bool toVelocity) {
+                                      float dt, double tEnd, const SurfaceContact& surface, bool toVelocity,
+                                      const std::vector<uint8_t>* owned) {
     return reduceLeafRanges(
         grid.leafCount(), LeafGrain::Nodes, GridUpdateResult{},
         [&](std::size_t begin, std::size_t end, GridUpdateResult& acc) {
             const auto contexts = contextsFor(colliders);
             for (std::size_t l = begin; l < end; ++l) {
+                if (owned && !(*owned)[l]) continue;
                 const LeafView& leaf = grid.leaf(l);
                 // Only the nodes P2G wrote: all others are zero, and stay so.
                 const NodeBox& box = grid.writtenBox(l);

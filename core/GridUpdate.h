@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/Collider.h"
+#include "core/ExactSum.h"
 #include "core/Species.h"
 #include "sparse/SparseGrid.h"
 
@@ -13,14 +14,16 @@ namespace mpm {
 
 struct GridUpdateResult {
     float maxSpeed = 0.0f;  ///< largest node speed
-    double work = 0.0;      ///< work moving colliders did on the nodes
+    ExactSum work;          ///< work moving colliders did on the nodes (exact: the same bits on any split)
 };
 
 /// Turns momentum into velocity on every written node, adds gravity, applies the colliders at time tEnd.
 /// With `toVelocity` false the nodes already hold velocities and only the colliders act (multi-field contact
-/// runs between the two).
+/// runs between the two). `owned`, when given, marks the leaves this process updates (per leaf, nonzero); the
+/// others are ghosts of leaves another rank owns, holding partial sums until their velocities arrive.
 GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
-                                      float dt, double tEnd, const SurfaceContact& surface, bool toVelocity = true);
+                                      float dt, double tEnd, const SurfaceContact& surface, bool toVelocity = true,
+                                      const std::vector<uint8_t>* owned = nullptr);
 
 /// Ghost nodes (simulation.wall_ghosts = "mirror"): after the colliders, every node with mass inside a sticky or
 /// slip collider takes the velocity mirrored from its image across the surface, odd about the wall's velocity
@@ -32,7 +35,7 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
 std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd);
 
 struct ProjectionSummary {
-    double work = 0.0;      ///< work moving colliders did on the particles they moved
+    ExactSum work;          ///< work moving colliders did on the particles they moved
     float maxSpeed = 0.0f;  ///< of those particles
     std::size_t moved = 0;
 };

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <chrono>
 #include <cmath>
@@ -35,7 +36,7 @@ private:
 }  // namespace
 
 Simulation::Simulation(const SimulationSettings& settings)
-    : settings_(settings), guard_(settings.stability, settings.gravity.norm(), settings.dx) {
+    : settings_(settings), guard_(settings.stability, settings.gravity.norm(), settings.dx), comm_(&Comm::single()) {
     fields_.resize(1);
     fieldSpecies_.resize(1);
     withKernel(settings_.transfer.interpolation, [&]<class K>() { fields_[0].configure(settings_.dx, K::kBaseShift, K::kWidth); });
@@ -57,6 +58,7 @@ int Simulation::addSpecies(AnySpecies species, int body) {
     state_.species.push_back(std::move(species));
     state_.bounds.minStiffnessKey.push_back(std::numeric_limits<float>::infinity());
     destination_.emplace_back();
+    populated_.push_back(particlesOf(state_.species.back()).size() > 0);
     return int(state_.species.size()) - 1;
 }
 
@@ -67,6 +69,35 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
         (!volumes.empty() && volumes.size() != x.size()))
         throw std::logic_error("addParticles: one velocity, mass or volume per particle, or none");
     float fastest = x.empty() ? 0.0f : v.norm();
+    for (const Vec3f& u : perParticle) fastest = std::max(fastest, (v + u).norm());
+    // Ids are given over all the particles, on every rank; each rank keeps those in the leaves it owns.
+    if (!x.empty()) populated_.at(std::size_t(s)) = 1;
+    std::vector<int32_t> ids(x.size());
+    for (int32_t& i : ids) i = state_.nextId++;
+    if (partitioned_ && comm_->distributed()) {
+        std::vector<std::size_t> keep;
+        for (std::size_t i = 0; i < x.size(); ++i)
+            if (ownerOf(leafOfNode(fields_[0].baseNode(x[i]))) == comm_->rank()) keep.push_back(i);
+        auto pick = [&](const auto& all) {
+            std::decay_t<decltype(all)> out;
+            if (all.empty()) return out;
+            for (std::size_t i : keep) out.push_back(all[i]);
+            return out;
+        };
+        const std::vector<Vec3d> kx = pick(x);
+        const std::vector<Vec3f> kv = pick(perParticle);
+        const std::vector<float> km = pick(masses), kvol = pick(volumes);
+        const std::vector<int32_t> kid = pick(ids);
+        appendParticles(s, kx, v, mass, volume, set, kv, km, kvol, kid);
+    } else {
+        appendParticles(s, x, v, mass, volume, set, perParticle, masses, volumes, ids);
+    }
+    state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, fastest);
+}
+
+void Simulation::appendParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
+                                 const std::vector<Vec3f>& perParticle, const std::vector<float>& masses,
+                                 const std::vector<float>& volumes, const std::vector<int32_t>& ids) {
     std::visit(
         [&](auto& sp) {
             using M = typename std::decay_t<decltype(sp)>::Material;
@@ -74,17 +105,14 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
             const std::size_t n0 = P.size(), n = x.size();
             P.x.insert(P.x.end(), x.begin(), x.end());
             P.v.resize(n0 + n, v);
-            for (std::size_t i = 0; i < perParticle.size(); ++i) {
-                P.v[n0 + i] += perParticle[i];
-                fastest = std::max(fastest, P.v[n0 + i].norm());
-            }
+            for (std::size_t i = 0; i < perParticle.size(); ++i) P.v[n0 + i] += perParticle[i];
             P.C.resize(n0 + n, Mat3f::Zero());
             if (masses.empty()) P.mass.resize(n0 + n, mass);
             else P.mass.insert(P.mass.end(), masses.begin(), masses.end());
             if (volumes.empty()) P.volume0.resize(n0 + n, volume);
             else P.volume0.insert(P.volume0.end(), volumes.begin(), volumes.end());
             P.set.resize(n0 + n, set);
-            for (std::size_t i = 0; i < n; ++i) P.id.push_back(state_.nextId++);
+            P.id.insert(P.id.end(), ids.begin(), ids.end());
             // A model whose rest state depends on its parameters (sand's cone) takes them.
             if constexpr (requires { sp.state.appendRest(n, sp.params); })
                 sp.state.appendRest(n, sp.params);
@@ -94,7 +122,8 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
             for (std::size_t i = n0; i < n0 + n; ++i) key = std::min(key, M::stiffnessKey(sp.state, i));
         },
         state_.species.at(s));
-    state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, fastest);
+    // A rank that kept none of them still takes their rest-state stiffness, as one process would.
+    comm_->min(state_.bounds.minStiffnessKey);
 }
 
 void Simulation::restore(SimState state) {
@@ -108,7 +137,9 @@ void Simulation::restore(SimState state) {
         if (state.species[s].index() != state_.species[s].index())
             throw std::invalid_argument("restore: species " + std::to_string(s) + " has another material");
     state_ = std::move(state);
-    restDensityCount_ = ~std::size_t(0);
+    for (std::size_t s = 0; s < state_.species.size(); ++s) populated_[s] = particlesOf(state_.species[s]).size() > 0;
+    restDensityVersion_ = -1;
+    partitioned_ = false;  // every rank holds the whole state again: distribute() cuts it anew
 }
 
 std::size_t Simulation::particleCount() const {
@@ -116,6 +147,8 @@ std::size_t Simulation::particleCount() const {
     for (const AnySpecies& s : state_.species) n += particlesOf(s).size();
     return n;
 }
+
+std::size_t Simulation::totalParticleCount() const { return std::size_t(comm_->sum((long long)particleCount())); }
 
 void Simulation::emitDue() {
     if (state_.emittedFrame == state_.frame) return;
@@ -128,7 +161,7 @@ double Simulation::cflTimeStep() const {
     if (!settings_.adaptive) return std::numeric_limits<double>::infinity();
     float c = 0.0f;
     for (std::size_t s = 0; s < state_.species.size(); ++s) {
-        if (particlesOf(state_.species[s]).size() == 0) continue;
+        if (!populated_[s]) continue;
         c = std::max(c, std::visit(
                             [&](const auto& sp) {
                                 using M = typename std::decay_t<decltype(sp)>::Material;
@@ -156,7 +189,7 @@ Simulation::StepBound Simulation::stepBound(bool withCause) const {
         std::visit(
             [&](const auto& sp) {
                 using M = typename std::decay_t<decltype(sp)>::Material;
-                const float w = sp.size() ? M::waveSpeed(sp.params, state_.bounds.minStiffnessKey[s]) : 0.0f;
+                const float w = populated_[s] ? M::waveSpeed(sp.params, state_.bounds.minStiffnessKey[s]) : 0.0f;
                 if (w > c) c = w, stiffest = sp.name;
             },
             state_.species[s]);
@@ -183,12 +216,22 @@ void Simulation::checkCoordinates() const {
                 return found;
             },
             [](std::size_t a, std::size_t b) { return std::min(a, b); });
-        if (far == P.size()) continue;
+        // The first rank with one reports it (one process reports the first in storage order: rank order).
+        const int reporter = comm_->firstRank(far < P.size());
+        if (reporter >= comm_->size()) continue;
+        if (comm_->rank() != reporter) {
+            const Bytes text = comm_->broadcast({}, reporter);
+            throw LimitExceeded(std::string(reinterpret_cast<const char*>(text.data()), text.size()));
+        }
         std::ostringstream msg;
         msg << "particle id " << P.id[far] << " of species " << std::visit([](const auto& sp) { return sp.name; }, state_.species[s])
             << " is at (" << P.x[far].transpose() << ") m at frame " << state_.frame << ", beyond the grid's coordinate range of +-"
             << limit << " m (2^30 cells of dx = " << settings_.dx << " m); keep the scene nearer the origin or use a larger dx";
-        throw LimitExceeded(msg.str());
+        const std::string text = msg.str();
+        Bytes b(text.size());
+        std::memcpy(b.data(), text.data(), text.size());
+        comm_->broadcast(b, reporter);
+        throw LimitExceeded(text);
     }
 }
 
@@ -212,6 +255,7 @@ void Simulation::refreshSpeedBound() {
     vmax = 0.0f;
     for (const AnySpecies& s : state_.species)
         for (const Vec3f& v : particlesOf(s).v) vmax = std::max(vmax, v.norm());
+    vmax = comm_->max(vmax);
 }
 
 template <class S>
@@ -262,15 +306,37 @@ void Simulation::withField(std::size_t f, Fn&& fn) {
 
 void Simulation::bin() {
     PhaseClock clock;
+    const bool ranks = partitioned_ && comm_->distributed();
+    if (ranks) {
+        rebalanceIfNeeded();
+        migrateParticles();
+        clock.lap(phases_.communication);
+    }
     for (std::size_t f = 0; f < fields_.size(); ++f)
         withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
             const std::vector<int>& members = fieldSpecies_[f];
             std::vector<BinRequest> requests(species.size());
             for (std::size_t s = 0; s < species.size(); ++s) {
                 std::vector<uint32_t>& dest = destination_[fields_.size() == 1 ? s : std::size_t(members[s])];
-                std::visit([&](auto& sp) { requests[s] = BinRequest{&sp.p.x, &dest, &sp.leafStart}; }, species[s]);
+                std::visit([&](auto& sp) { requests[s] = BinRequest{&sp.p.x, &sp.p.id, &dest, &sp.leafStart}; }, species[s]);
             }
-            grid.updateTopology(requests);
+            grid.collectLeaves(requests);
+            if (ranks) exchangeReachedLeaves(grid);
+            grid.allocateLeaves();
+            if (ranks) {
+                // Which leaves are whose, and the ghost leaves each side of every rank pair, in leaf order.
+                owned_.assign(grid.leafCount(), 0);
+                for (auto& g : ghostsFrom_) g.clear();
+                ghostsFrom_.resize(std::size_t(comm_->size()));
+                for (std::size_t l = 0; l < grid.leafCount(); ++l) {
+                    const int owner = ownerOf(leafOfNode(grid.leaf(l).origin));
+                    if (owner == comm_->rank()) owned_[l] = 1;
+                    else ghostsFrom_[std::size_t(owner)].push_back(uint32_t(l));
+                }
+                ghostsFor_.assign(std::size_t(comm_->size()), {});
+                for (std::size_t r = 0; r < ghostCoordsFor_.size(); ++r)
+                    for (const Vec3i& c : ghostCoordsFor_[r]) ghostsFor_[r].push_back(grid.indexOfLeaf(c));
+            }
             clock.lap(phases_.topology);
             grid.sortParticles(requests);
             for (std::size_t s = 0; s < species.size(); ++s) {
@@ -296,16 +362,17 @@ SurfaceContact Simulation::surfaceContact() {
     for (const auto& c : colliders_) unilateral = unilateral || c->boundary() == Boundary::Separate;
     if (!unilateral) return s;
     // The material's rest density, mass over rest volume over all particles (exact for one material); it
-    // changes only when particles are added, so it is measured again only then.
-    const std::size_t count = particleCount();
-    if (count != restDensityCount_) {
-        double mass = 0.0, volume = 0.0;
+    // changes only when particles are added (nextId moves, on every rank alike), so it is measured again only then.
+    if (state_.nextId != restDensityVersion_) {
+        ExactSum mass, volume;
         for (const AnySpecies& sp : state_.species) {
             const ParticleArrays& P = particlesOf(sp);
             for (std::size_t i = 0; i < P.size(); ++i) mass += double(P.mass[i]), volume += double(P.volume0[i]);
         }
-        restDensity_ = volume > 0.0 ? mass / volume : 0.0;
-        restDensityCount_ = count;
+        comm_->sum(mass);
+        comm_->sum(volume);
+        restDensity_ = volume.value() > 0.0 ? mass.value() / volume.value() : 0.0;
+        restDensityVersion_ = state_.nextId;
     }
     if (!(restDensity_ > 0.0)) return s;
     s.cellMass = float(restDensity_ * std::pow(settings_.dx, 3));
@@ -320,8 +387,16 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     const SurfaceContact surface = surfaceContact();
     const bool mirror = settings_.wallGhosts == WallGhosts::Mirror;
     if (fields_.size() == 1) {
-        const GridUpdateResult r = updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface);
+        const bool ranks = partitioned_ && comm_->distributed();
+        GridUpdateResult r = updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface, true, ranks ? &owned_ : nullptr);
         if (mirror) mirrorGhostNodes(fields_[0], colliders_, tEnd);
+        if (ranks) {
+            PhaseClock clock;
+            r.maxSpeed = comm_->max(r.maxSpeed);
+            comm_->sum(r.work);
+            sendGhostVelocities(fields_[0]);
+            clock.lap(phases_.communication);
+        }
         return r;
     }
     // Bodies of their own: velocities in every field, then the contact between them, then the colliders.
@@ -339,12 +414,57 @@ GridUpdateResult Simulation::updateGrid(float dt) {
 }
 
 void Simulation::scatter(float dt) {
+    if (partitioned_ && comm_->distributed()) {
+        // Halo parts for ghost leaves go to their owners; the owners' leaves add every part in order d.
+        RemoteHalos remote;
+        remote.owned = &owned_;
+        remote.exchange = [&](HaloParts&& out) {
+            PhaseClock clock;
+            std::vector<Bytes> send(static_cast<std::size_t>(comm_->size()));
+            for (const HaloParts::Part& part : out.parts) {
+                Bytes& b = send[std::size_t(ownerOf(part.leaf))];
+                for (int a = 0; a < 3; ++a) put(b, int32_t(part.leaf[a]));
+                put(b, part.d);
+                putArray(b, part.lo, 3);
+                putArray(b, part.hi, 3);
+                std::size_t n = 1;
+                for (int a = 0; a < 3; ++a) n *= std::size_t(part.hi[a] - part.lo[a]);
+                put(b, uint64_t(n));
+                putArray(b, out.data.data() + 4 * part.offset, 4 * n);
+            }
+            const std::vector<Bytes> received = comm_->exchange(send);
+            HaloParts in;
+            for (const Bytes& b : received) {
+                ByteReader r{b};
+                while (!r.done()) {
+                    HaloParts::Part part;
+                    for (int a = 0; a < 3; ++a) part.leaf[a] = r.get<int32_t>();
+                    part.d = r.get<int32_t>();
+                    r.getArray(part.lo, 3);
+                    r.getArray(part.hi, 3);
+                    const std::size_t n = r.get<uint64_t>();
+                    part.offset = in.data.size() / 4;
+                    in.data.resize(in.data.size() + 4 * n);
+                    r.getArray(in.data.data() + 4 * part.offset, 4 * n);
+                    in.parts.push_back(part);
+                }
+            }
+            clock.lap(phases_.communication);
+            return in;
+        };
+        particlesToGrid(fields_[0], state_.species, settings_.transfer, dt, &remote);
+        return;
+    }
     for (std::size_t f = 0; f < fields_.size(); ++f)
         withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) { particlesToGrid(grid, species, settings_.transfer, dt); });
 }
 
 G2PSummary Simulation::gather(float dt) {
-    if (fields_.size() == 1) return gridToParticles(fields_[0], state_.species, settings_.transfer, dt);
+    if (fields_.size() == 1) {
+        G2PSummary g2p = gridToParticles(fields_[0], state_.species, settings_.transfer, dt);
+        reduceSummary(g2p);
+        return g2p;
+    }
     // Field by field, with each field's per-species results put back at the species' own index.
     G2PSummary out;
     out.minStiffnessKey.assign(state_.species.size(), std::numeric_limits<float>::infinity());
@@ -360,6 +480,7 @@ G2PSummary Simulation::gather(float dt) {
                 out.badField = r.badField;
             }
         });
+    reduceSummary(out);
     return out;
 }
 
@@ -372,6 +493,11 @@ ProjectionSummary Simulation::holdOutOfColliders(float dt) {
             out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
             out.moved += r.moved;
         });
+    if (comm_->distributed() && !colliders_.empty()) {
+        comm_->sum(out.work);
+        out.maxSpeed = comm_->max(out.maxSpeed);
+        out.moved = std::size_t(comm_->sum((long long)out.moved));
+    }
     return out;
 }
 
@@ -401,7 +527,9 @@ double Simulation::substep(double dtMax) {
     const ProjectionSummary held = holdOutOfColliders(float(dt));
     clock.lap(phases_.g2p);
     // Work moving colliders did is external: the energy check counts it.
-    state_.energy.work += gridUpdate.work + held.work;
+    ExactSum work = gridUpdate.work;
+    work += held.work;
+    state_.energy.work += work.value();
     // The bounds the next step starts from, then the blow-up checks: a non-finite value, a particle that
     // outran its stencil, a CFL step that collapsed.
     const double cflBefore = cflTimeStep();
@@ -444,7 +572,9 @@ void Simulation::runFrameSubsteps() {
     const double frameEnd = double(state_.frame + 1) / settings_.fps;
     while (state_.time < frameEnd) {
         // A stop asked for (a signal) is honoured here, between two substeps, where the state is consistent.
-        if (stop_ && stop_->load(std::memory_order_relaxed)) throw Interrupted();
+        // On several ranks every rank stops at the same substep: a signal reaches them at different times.
+        const bool stopAsked = stop_ && stop_->load(std::memory_order_relaxed) != 0;
+        if (comm_->max(stopAsked ? 1.0f : 0.0f) > 0.0f) throw Interrupted();
         const double remaining = frameEnd - state_.time;
         const double dtMax = std::min(settings_.targetDt(), cflTimeStep()) * guard_.stepScale();
         // Split the rest of the frame into equal substeps so that the last one lands on the frame time.
@@ -485,9 +615,9 @@ FrameStats Simulation::advanceFrame() {
     state_.frameSubsteps = 0;
     ++state_.frame;
     checkCoordinates();
-    const std::size_t before = particleCount();
+    const int32_t before = state_.nextId;
     emitDue();
-    if (particleCount() != before) {
+    if (state_.nextId != before) {
         // New material brings its own energy: measure again and restart the growth reference.
         st = measure();
         guard_.resetEnergyReference(state_.energy, st);
@@ -502,13 +632,318 @@ FrameStats Simulation::advanceFrame() {
 }
 
 FrameStats Simulation::measure() const {
-    FrameStats st = measureParticles(state_.species, settings_.dx, kernelInertiaScale(), settings_.gravity);
+    ParticleSums sums = sumParticles(state_.species, settings_.dx, kernelInertiaScale(), settings_.gravity);
+    std::size_t leaves = 0;
+    for (const SparseGrid& field : fields_) leaves += field.leafCount();
+    if (comm_->distributed()) {
+        for (ExactSum& e : sums.sum) comm_->sum(e);
+        sums.maxSpeed = comm_->max(sums.maxSpeed);
+        sums.minJ = comm_->min(sums.minJ);
+        sums.maxJ = comm_->max(sums.maxJ);
+        sums.particles = std::size_t(comm_->sum((long long)sums.particles));
+        // A leaf counts once, on its owner (the others hold it as a ghost).
+        if (partitioned_) leaves = std::size_t(std::count(owned_.begin(), owned_.end(), uint8_t(1)));
+        leaves = std::size_t(comm_->sum((long long)leaves));
+    }
+    FrameStats st = sums.stats();
     st.frame = state_.frame;
     st.time = state_.time;
-    st.activeLeaves = 0;
-    st.gridBytes = 0;
-    for (const SparseGrid& field : fields_) st.activeLeaves += field.leafCount(), st.gridBytes += field.contentBytes();
+    st.activeLeaves = leaves;
+    st.gridBytes = leaves * SparseGrid::bytesPerLeaf();
     return st;
+}
+
+
+// ---- Ranks (docs/distributed.md) ----
+
+namespace {
+/// Beyond every leaf in Morton order (leaf coordinates stay within 2^27 of the origin).
+const Vec3i kPastLastLeaf(1 << 29, 1 << 29, 1 << 29);
+
+/// Keeps the particles (every array of the species) whose flag is set, in order.
+template <class S>
+void keepWhere(S& sp, const std::vector<uint8_t>& keep) {
+    sp.forEachArray([&](auto& arr) {
+        std::size_t k = 0;
+        for (std::size_t i = 0; i < arr.size(); ++i)
+            if (keep[i]) arr[k++] = arr[i];
+        arr.resize(k);
+    });
+}
+/// Appends the flagged particles of a species to a byte buffer: their count, then array by array.
+template <class S>
+void packWhere(const S& sp, const std::vector<int>& owner, int to, Bytes& b) {
+    uint64_t n = 0;
+    for (int o : owner) n += o == to;
+    put(b, n);
+    sp.forEachArray([&](const auto& arr) {
+        for (std::size_t i = 0; i < arr.size(); ++i)
+            if (owner[i] == to) put(b, arr[i]);
+    });
+}
+template <class S>
+void unpackAppend(S& sp, ByteReader& r) {
+    const uint64_t n = r.get<uint64_t>();
+    sp.forEachArray([&](auto& arr) {
+        const std::size_t n0 = arr.size();
+        arr.resize(n0 + n);
+        r.getArray(arr.data() + n0, n);
+    });
+}
+}  // namespace
+
+int Simulation::ownerOf(const Vec3i& leafCoord) const {
+    return int(std::upper_bound(splitters_.begin(), splitters_.end(), leafCoord, mortonLess) - splitters_.begin());
+}
+
+std::vector<std::pair<Vec3i, long long>> Simulation::particlesPerLeaf() const {
+    std::vector<Vec3i> leaves;
+    leaves.reserve(particleCount());
+    for (const AnySpecies& s : state_.species)
+        for (const Vec3d& x : particlesOf(s).x) leaves.push_back(leafOfNode(fields_[0].baseNode(x)));
+    tbb::parallel_sort(leaves.begin(), leaves.end(), mortonLess);
+    std::vector<std::pair<Vec3i, long long>> counts;
+    for (const Vec3i& c : leaves) {
+        if (counts.empty() || counts.back().first != c) counts.emplace_back(c, 0);
+        ++counts.back().second;
+    }
+    return counts;
+}
+
+void Simulation::cutLeaves(const std::vector<std::pair<Vec3i, long long>>& leafCounts) {
+    // Equal shares of particles: rank r's range starts at the first leaf with r / R of them before it.
+    const long long R = comm_->size();
+    long long total = 0;
+    for (const auto& [c, n] : leafCounts) total += n;
+    splitters_.assign(std::size_t(R - 1), kPastLastLeaf);
+    long long before = 0;
+    std::size_t next = 0;
+    for (const auto& [c, n] : leafCounts) {
+        while (next < splitters_.size() && before * R >= total * (long long)(next + 1)) splitters_[next++] = c;
+        before += n;
+    }
+    // How unequal the cut is (a leaf is not split): re-cutting is pointless until motion adds to it.
+    std::vector<long long> load(std::size_t(R), 0);
+    for (const auto& [c, n] : leafCounts) load[std::size_t(ownerOf(c))] += n;
+    const double mean = double(total) / double(R);
+    cutImbalance_ = mean > 0.0 ? double(*std::max_element(load.begin(), load.end())) / mean - 1.0 : 0.0;
+}
+
+void Simulation::distribute(const Comm& comm) {
+    comm_ = &comm;
+    guard_.setComm(&comm);
+    if (!comm.distributed()) return;
+    if (fields_.size() > 1 || settings_.contact == ContactModel::MultiField)
+        throw std::invalid_argument("simulation.contact = \"multi_field\" runs on one rank only for now");
+    if (settings_.wallGhosts == WallGhosts::Mirror)
+        throw std::invalid_argument("simulation.wall_ghosts = \"mirror\" runs on one rank only for now");
+    // Every rank holds every particle here, so each computes the same cut from its own counts.
+    cutLeaves(particlesPerLeaf());
+    partitioned_ = true;
+    for (AnySpecies& s : state_.species)
+        std::visit(
+            [&](auto& sp) {
+                std::vector<uint8_t> keep(sp.p.size());
+                for (std::size_t i = 0; i < keep.size(); ++i)
+                    keep[i] = ownerOf(leafOfNode(fields_[0].baseNode(sp.p.x[i]))) == comm.rank();
+                keepWhere(sp, keep);
+                sp.leafStart.clear();
+            },
+            s);
+}
+
+void Simulation::rebalanceIfNeeded() {
+    const long long mine = (long long)particleCount();
+    const long long total = comm_->sum(mine);
+    const double most = comm_->max(double(mine));
+    const double mean = double(total) / double(comm_->size());
+    if (total == 0 || most <= mean * (1.0 + cutImbalance_ + settings_.rebalanceImbalance)) return;
+    // Every rank's particles per leaf, merged (a leaf's particles can sit on two ranks until they migrate).
+    Bytes b;
+    for (const auto& [c, n] : particlesPerLeaf()) {
+        for (int a = 0; a < 3; ++a) put(b, int32_t(c[a]));
+        put(b, n);
+    }
+    std::vector<std::pair<Vec3i, long long>> all;
+    for (const Bytes& part : comm_->allGather(b)) {
+        ByteReader r{part};
+        while (!r.done()) {
+            Vec3i c;
+            for (int a = 0; a < 3; ++a) c[a] = r.get<int32_t>();
+            all.emplace_back(c, r.get<long long>());
+        }
+    }
+    std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return mortonLess(a.first, b.first); });
+    std::vector<std::pair<Vec3i, long long>> merged;
+    for (const auto& e : all) {
+        if (!merged.empty() && merged.back().first == e.first) merged.back().second += e.second;
+        else merged.push_back(e);
+    }
+    cutLeaves(merged);
+    ++rebalances_;
+}
+
+void Simulation::migrateParticles() {
+    const int R = comm_->size(), me = comm_->rank();
+    std::vector<Bytes> out(static_cast<std::size_t>(R));
+    for (AnySpecies& s : state_.species)
+        std::visit(
+            [&](auto& sp) {
+                std::vector<int> owner(sp.p.size());
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, owner.size(), kPermuteGrain), [&](const auto& r) {
+                    for (std::size_t i = r.begin(); i < r.end(); ++i) owner[i] = ownerOf(leafOfNode(fields_[0].baseNode(sp.p.x[i])));
+                });
+                for (int r = 0; r < R; ++r)
+                    if (r != me) packWhere(sp, owner, r, out[std::size_t(r)]);
+                std::vector<uint8_t> keep(owner.size());
+                for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = owner[i] == me;
+                keepWhere(sp, keep);
+            },
+            s);
+    const std::vector<Bytes> in = comm_->exchange(out);
+    for (int r = 0; r < R; ++r) {
+        if (r == me || in[std::size_t(r)].empty()) continue;
+        ByteReader reader{in[std::size_t(r)]};
+        for (AnySpecies& s : state_.species) std::visit([&](auto& sp) { unpackAppend(sp, reader); }, s);
+    }
+}
+
+void Simulation::exchangeReachedLeaves(SparseGrid& grid) {
+    // Each rank tells the owners of the leaves its stencils reach that it holds them as ghosts: the owner
+    // must allocate them (its own particles may not reach them) and send their velocities back.
+    const int R = comm_->size(), me = comm_->rank();
+    std::vector<Bytes> out(static_cast<std::size_t>(R));
+    for (const Vec3i& c : grid.reachedLeaves()) {
+        const int owner = ownerOf(c);
+        if (owner == me) continue;
+        for (int a = 0; a < 3; ++a) put(out[std::size_t(owner)], int32_t(c[a]));
+    }
+    const std::vector<Bytes> in = comm_->exchange(out);
+    ghostCoordsFor_.assign(std::size_t(R), {});
+    std::vector<Vec3i> all;
+    for (int r = 0; r < R; ++r) {
+        if (r == me) continue;
+        ByteReader reader{in[std::size_t(r)]};
+        while (!reader.done()) {
+            Vec3i c;
+            for (int a = 0; a < 3; ++a) c[a] = reader.get<int32_t>();
+            ghostCoordsFor_[std::size_t(r)].push_back(c);
+            all.push_back(c);
+        }
+    }
+    grid.addReachedLeaves(all);
+}
+
+void Simulation::sendGhostVelocities(SparseGrid& grid) {
+    // Owners send the nodes P2G wrote in each ghost leaf (box, then velocities); holders replace theirs.
+    const int R = comm_->size(), me = comm_->rank();
+    std::vector<Bytes> out(static_cast<std::size_t>(R));
+    for (int r = 0; r < R; ++r) {
+        if (r == me) continue;
+        Bytes& b = out[std::size_t(r)];
+        for (uint32_t l : ghostsFor_[std::size_t(r)]) {
+            const NodeBox& box = grid.writtenBox(l);
+            putArray(b, box.lo, 3);
+            putArray(b, box.hi, 3);
+            const float* v = grid.leaf(l).momentum;
+            box.forEach([&](int n) { putArray(b, v + 3 * n, 3); });
+        }
+    }
+    const std::vector<Bytes> in = comm_->exchange(out);
+    for (int r = 0; r < R; ++r) {
+        if (r == me) continue;
+        ByteReader reader{in[std::size_t(r)]};
+        for (uint32_t l : ghostsFrom_[std::size_t(r)]) {
+            const LeafView& leaf = grid.leaf(l);
+            grid.writtenBox(l).forEach([&](int n) {
+                leaf.mass[n] = 0.0f;
+                leaf.momentum[3 * n] = leaf.momentum[3 * n + 1] = leaf.momentum[3 * n + 2] = 0.0f;
+            });
+            NodeBox box;
+            reader.getArray(box.lo, 3);
+            reader.getArray(box.hi, 3);
+            box.forEach([&](int n) { reader.getArray(leaf.momentum + 3 * n, 3); });
+            grid.writtenBox(l) = box;
+        }
+    }
+}
+
+void Simulation::reduceSummary(G2PSummary& g2p) const {
+    if (g2p.badParticle >= 0) g2p.badId = particlesOf(state_.species[std::size_t(g2p.badSpecies)]).id[std::size_t(g2p.badParticle)];
+    if (!comm_->distributed()) return;
+    g2p.maxSpeed = comm_->max(g2p.maxSpeed);
+    comm_->min(g2p.minStiffnessKey);
+    // One process reports the first bad particle in leaf order: on ranks, the lowest rank's first.
+    const int reporter = comm_->firstRank(g2p.badParticle >= 0);
+    if (reporter >= comm_->size()) return;
+    Bytes b;
+    if (comm_->rank() == reporter) {
+        put(b, int32_t(g2p.badSpecies));
+        put(b, g2p.badId);
+        put(b, int32_t(std::string(g2p.badField) == "velocity" ? 0 : 1));
+    }
+    b = comm_->broadcast(b, reporter);
+    ByteReader r{b};
+    g2p.badSpecies = r.get<int32_t>();
+    g2p.badId = r.get<int32_t>();
+    g2p.badField = r.get<int32_t>() == 0 ? "velocity" : "deformation";
+    if (comm_->rank() != reporter) g2p.badParticle = -2;  // held elsewhere: only the id is known here
+}
+
+std::vector<AnySpecies> Simulation::gatherSpecies() const {
+    if (!comm_->distributed()) return state_.species;
+    // One process holds the particles binned at the last substep in leaf order (the ranks' in rank order,
+    // each in leaf order), then those emitted since, in id order: the ranks' latecomers are merged by id.
+    std::vector<AnySpecies> out;
+    for (const AnySpecies& s : state_.species)
+        std::visit(
+            [&](const auto& sp) {
+                using S = std::decay_t<decltype(sp)>;
+                const std::size_t binned = sp.leafStart.empty() ? 0 : std::min<std::size_t>(sp.leafStart.back(), sp.p.size());
+                std::vector<int> part(sp.p.size(), 0);
+                for (std::size_t i = binned; i < part.size(); ++i) part[i] = 1;
+                Bytes b;
+                packWhere(sp, part, 0, b);
+                packWhere(sp, part, 1, b);
+                const std::vector<Bytes> all = comm_->gatherToRoot(b);
+                S whole;
+                whole.name = sp.name;
+                whole.params = sp.params;
+                if (comm_->rank() == 0) {
+                    S late = whole;
+                    for (const Bytes& rankBytes : all) {
+                        ByteReader r{rankBytes};
+                        unpackAppend(whole, r);
+                        unpackAppend(late, r);
+                    }
+                    std::vector<uint32_t> order(late.p.size());
+                    for (std::size_t i = 0; i < order.size(); ++i) order[i] = uint32_t(i);
+                    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t c) { return late.p.id[a] < late.p.id[c]; });
+                    late.forEachArray([&](auto& arr) {
+                        std::decay_t<decltype(arr)> sorted;
+                        sorted.reserve(arr.size());
+                        for (uint32_t i : order) sorted.push_back(arr[i]);
+                        arr.swap(sorted);
+                    });
+                    std::vector<int> all0(late.p.size(), 0);
+                    Bytes lateBytes;
+                    packWhere(late, all0, 0, lateBytes);
+                    ByteReader r{lateBytes};
+                    unpackAppend(whole, r);
+                }
+                out.emplace_back(std::move(whole));
+            },
+            s);
+    return out;
+}
+
+SimState Simulation::gatherState() {
+    std::vector<AnySpecies> whole = gatherSpecies();
+    std::vector<AnySpecies> mine = std::move(state_.species);
+    SimState copy = state_;  // everything but the particles, which are the gathered ones
+    state_.species = std::move(mine);
+    copy.species = std::move(whole);
+    return copy;
 }
 
 }  // namespace mpm

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/Collider.h"
+#include "core/Comm.h"
 #include "core/Diagnostics.h"
 #include "core/GridUpdate.h"
 #include "core/SimState.h"
@@ -47,6 +48,10 @@ struct SimulationSettings {
     float contactFriction = 0.0f;  ///< Coulomb mu between bodies (multi_field)
     WallGhosts wallGhosts = WallGhosts::Held;
     WallContact wallContact = WallContact::Surface;  ///< for `separate` colliders (sticky and slip hold from the stencil's reach)
+
+    /// Ranks re-cut the leaves into equal shares of particles when the most loaded holds more than this much
+    /// above the mean (docs/distributed.md); results do not depend on it, only the time per substep does.
+    double rebalanceImbalance = 0.1;
 
     double targetDt() const { return 1.0 / (fps * substepsPerFrame); }
 };
@@ -87,7 +92,8 @@ struct PhaseSeconds {
     double grid = 0.0;      ///< grid velocity update, gravity and colliders
     double g2p = 0.0;       ///< grid-to-particle gather, deformation update, advection
     double other = 0.0;     ///< time step, stability checks
-    double total() const { return topology + binning + p2g + grid + g2p + other; }
+    double communication = 0.0;  ///< ranks: particles moving between ranks, halos, ghost velocities, global sums
+    double total() const { return topology + binning + p2g + grid + g2p + other + communication; }
 };
 
 class Simulation {
@@ -161,13 +167,42 @@ public:
     int frame() const { return state_.frame; }
     long long substepCount() const { return state_.substeps; }
     int retryCount() const { return state_.retries; }
+    /// Particles held here (on one rank of several: that rank's share).
     std::size_t particleCount() const;
+    /// Particles of the whole run, over every rank.
+    std::size_t totalParticleCount() const;
+
+    /// Spreads the run over the ranks of `comm` (docs/distributed.md). Every rank built the same model and
+    /// holds the same particles (a scene built, or a checkpoint restored, on each); each then keeps only the
+    /// particles of the leaves it owns. The leaves, in Morton order, are cut into ranges of equal particle
+    /// counts. With one rank this changes nothing.
+    void distribute(const Comm& comm);
+    const Comm& comm() const { return *comm_; }
+    /// Every particle of the run on rank 0, species by species in the order one process would hold them
+    /// (elsewhere empty species). One process: a copy of the species. Collective.
+    std::vector<AnySpecies> gatherSpecies() const;
+    /// The state with every particle (gatherSpecies), on rank 0: what a checkpoint of the run holds. Collective.
+    SimState gatherState();
+    /// Times the ranks re-cut their leaves since the start of this process.
+    int rebalanceCount() const { return rebalances_; }
+    /// The rank owning a leaf (by leaf coordinate).
+    int ownerOf(const Vec3i& leafCoord) const;
     float kernelInertiaScale() const;
     const PhaseSeconds& phaseSeconds() const { return phases_; }
     void resetPhaseSeconds() { phases_ = PhaseSeconds(); }
 
 private:
     void runFrameSubsteps();
+    // Ranks (docs/distributed.md): the cut of the leaves, particles moving to their leaf's owner, the leaves
+    // other ranks' stencils reach, and the ghost leaves' velocities after the grid update.
+    void cutLeaves(const std::vector<std::pair<Vec3i, long long>>& leafCounts);
+    std::vector<std::pair<Vec3i, long long>> particlesPerLeaf() const;
+    void rebalanceIfNeeded();
+    void migrateParticles();
+    void exchangeReachedLeaves(SparseGrid& grid);
+    void sendGhostVelocities(SparseGrid& grid);
+    /// Globalises a G2P summary: extremes over ranks, and the bad particle one process would report first.
+    void reduceSummary(G2PSummary& g2p) const;
     StepBound lastBound_{0.0, "", ""};  ///< what set the latest substep's step (stats only, not state)
     void checkCoordinates() const;
     void bin();
@@ -180,6 +215,10 @@ private:
     ProjectionSummary holdOutOfColliders(float dt);
     template <class S>
     void permute(S& species, const std::vector<uint32_t>& destination);
+    /// addParticles' second half: appends the particles (already those this rank keeps) with the given ids.
+    void appendParticles(int species, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
+                         const std::vector<Vec3f>& perParticle, const std::vector<float>& masses, const std::vector<float>& volumes,
+                         const std::vector<int32_t>& ids);
     /// Calls fn(grid, species) for field f with the species that scatter into it, in species order (with one
     /// field, all of them in place; otherwise they are moved into a scratch list and back, pointers only).
     template <class Fn>
@@ -196,13 +235,26 @@ private:
     std::vector<std::vector<int>> fieldSpecies_;     ///< per field, its species
     std::vector<AnySpecies> fieldScratch_;           ///< a field's species while its transfers run
     double restDensity_ = 0.0;                       ///< of all particles, for SurfaceContact
-    std::size_t restDensityCount_ = ~std::size_t(0);  ///< the particle count it was measured at
+    /// Per species: whether it has particles anywhere (on any rank); particles are never removed, so this is
+    /// set by emission and restore alone, on every rank alike.
+    std::vector<uint8_t> populated_;
     std::vector<std::vector<uint32_t>> destination_;  ///< per species: sorted slot of each particle
     std::vector<std::byte> scratch_;                  ///< permutation buffer, shared by every particle array
     // Policy and timings.
     StabilityGuard guard_;
     PhaseSeconds phases_;
     const std::atomic<int>* stop_ = nullptr;
+    // Ranks.
+    const Comm* comm_;
+    std::vector<Vec3i> splitters_;  ///< leaf coordinate where rank r + 1's range starts (Morton order)
+    bool partitioned_ = false;
+    std::vector<uint8_t> owned_;                     ///< per leaf of the grid: owned by this rank
+    std::vector<std::vector<uint32_t>> ghostsFrom_;  ///< per rank: this rank's ghost leaves that rank owns
+    std::vector<std::vector<uint32_t>> ghostsFor_;   ///< per rank: owned leaves that rank holds as ghosts
+    std::vector<std::vector<Vec3i>> ghostCoordsFor_;  ///< the same by leaf coordinate, as that rank sent them
+    int rebalances_ = 0;
+    double cutImbalance_ = 0.0;  ///< how far above the mean the last cut left the most loaded rank
+    int32_t restDensityVersion_ = -1;  ///< nextId when the rest density was measured (the same on every rank)
 };
 
 }  // namespace mpm

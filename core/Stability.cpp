@@ -1,81 +1,122 @@
 #include "core/Stability.h"
 
+#include <optional>
 #include <sstream>
 
 namespace mpm {
 
 namespace {
 
+/// A particle a failure names: its species and id, and what the message says of it.
+struct Culprit {
+    int species = 0;
+    int32_t id = -1;
+    float speed = 0.0f, J = 1.0f;
+    float rank = 0.0f;  ///< what it was picked by, larger first (speed squared; minus the stiffness key)
+};
+
 float volumeRatioOf(const SimState& state, int s, std::size_t i) {
     return std::visit([&](const auto& sp) { return std::decay_t<decltype(sp)>::Material::volumeRatio(sp.state, i); },
                       state.species[s]);
 }
+Culprit describe(const SimState& state, int s, std::size_t i) {
+    const ParticleArrays& P = particlesOf(state.species[s]);
+    return Culprit{s, P.id[i], P.v[i].norm(), volumeRatioOf(state, s, i)};
+}
 
-std::pair<int, std::size_t> fastestParticle(const SimState& state) {
-    std::pair<int, std::size_t> best{0, 0};
-    float vmax = -1.0f;
-    for (std::size_t s = 0; s < state.species.size(); ++s) {
-        const ParticleArrays& P = particlesOf(state.species[s]);
-        for (std::size_t i = 0; i < P.size(); ++i)
-            if (P.v[i].squaredNorm() > vmax) vmax = P.v[i].squaredNorm(), best = {int(s), i};
+/// Of the candidates of every rank (one each, or none), the one a single process would find first: the
+/// best key, then the lower species, then the lower rank (ranks hold the leaves in order).
+std::optional<Culprit> firstOverRanks(const Comm& comm, const std::optional<Culprit>& mine) {
+    if (!comm.distributed()) return mine;
+    Bytes b;
+    if (mine) put(b, *mine);
+    std::optional<Culprit> best;
+    for (const Bytes& theirs : comm.allGather(b)) {
+        if (theirs.empty()) continue;
+        ByteReader r{theirs};
+        const Culprit c = r.get<Culprit>();
+        if (!best || c.rank > best->rank || (c.rank == best->rank && c.species < best->species)) best = c;
     }
     return best;
 }
 
+Culprit fastestParticle(const SimState& state, const Comm& comm) {
+    std::optional<Culprit> best;
+    float vmax = -1.0f;
+    for (std::size_t s = 0; s < state.species.size(); ++s) {
+        const ParticleArrays& P = particlesOf(state.species[s]);
+        for (std::size_t i = 0; i < P.size(); ++i)
+            if (P.v[i].squaredNorm() > vmax) {
+                vmax = P.v[i].squaredNorm();
+                best = describe(state, int(s), i);
+                best->rank = vmax;
+            }
+    }
+    return firstOverRanks(comm, best).value_or(Culprit{});
+}
+
 /// The species with the fastest wave, and in it the particle with the smallest stiffness key; or the
 /// fastest particle, when speed rather than stiffness collapsed the step.
-std::pair<int, std::size_t> stiffestParticle(const SimState& state) {
-    std::pair<int, std::size_t> best{0, 0};
+Culprit stiffestParticle(const SimState& state, const Comm& comm) {
+    int stiffest = -1;
     float cmax = -1.0f;
-    for (std::size_t s = 0; s < state.species.size(); ++s) {
+    for (std::size_t s = 0; s < state.species.size(); ++s)
         std::visit(
             [&](const auto& sp) {
                 using M = typename std::decay_t<decltype(sp)>::Material;
-                const float key = state.bounds.minStiffnessKey[s];
-                if (sp.size() == 0 || M::waveSpeed(sp.params, key) <= cmax) return;
-                cmax = M::waveSpeed(sp.params, key);
+                const long long count = comm.sum((long long)sp.size());
+                const float c = M::waveSpeed(sp.params, state.bounds.minStiffnessKey[s]);
+                if (count > 0 && c > cmax) cmax = c, stiffest = int(s);
+            },
+            state.species[s]);
+    std::optional<Culprit> mine;
+    if (stiffest >= 0)
+        std::visit(
+            [&](const auto& sp) {
+                using M = typename std::decay_t<decltype(sp)>::Material;
+                if (sp.size() == 0) return;
                 std::size_t arg = 0;
                 for (std::size_t i = 1; i < sp.size(); ++i)
                     if (M::stiffnessKey(sp.state, i) < M::stiffnessKey(sp.state, arg)) arg = i;
-                best = {int(s), arg};
+                const float key = M::stiffnessKey(sp.state, arg);
+                mine = describe(state, stiffest, arg);
+                mine->rank = -key;  // the smallest key first
             },
-            state.species[s]);
-    }
-    const auto fast = fastestParticle(state);
-    return particlesOf(state.species[fast.first]).v[fast.second].norm() > cmax ? fast : best;
+            state.species[std::size_t(stiffest)]);
+    const std::optional<Culprit> best = firstOverRanks(comm, mine);
+    const Culprit fast = fastestParticle(state, comm);
+    return fast.speed > cmax || !best ? fast : *best;
 }
 
 }  // namespace
 
-void failAt(const SimState& state, const std::string& cause, int s, std::size_t i, double dt) {
+void failAt(const SimState& state, const std::string& cause, int s, int32_t id, double dt) {
     std::ostringstream msg;
     msg << cause << " at frame " << state.frame << ", substep " << state.substeps << " (t = " << state.time << " s, dt = " << dt
-        << " s): particle id " << particlesOf(state.species[s]).id[i] << " of species "
-        << std::visit([](const auto& sp) { return sp.name; }, state.species[s]);
+        << " s): particle id " << id << " of species " << std::visit([](const auto& sp) { return sp.name; }, state.species[s]);
     throw SimulationError(msg.str());
 }
 
 void StabilityGuard::checkSubstep(const SimState& state, const G2PSummary& g2p, double dt, double dx, double cflBefore,
                                   double cflAfter) const {
-    if (g2p.badParticle >= 0)
-        failAt(state, std::string("non-finite ") + g2p.badField, g2p.badSpecies, std::size_t(g2p.badParticle), dt);
+    if (g2p.badId >= 0) failAt(state, std::string("non-finite ") + g2p.badField, g2p.badSpecies, g2p.badId, dt);
     // Advection moved every particle by dt v: more than a cell means the step outran its own stencil.
     if (settings_.cellCrossing && double(g2p.maxSpeed) * dt > dx) {
-        const auto [s, i] = fastestParticle(state);
+        const Culprit p = fastestParticle(state, *comm_);
         std::ostringstream cause;
         cause << "particle moved " << double(g2p.maxSpeed) * dt / dx << " cells in one substep (speed " << g2p.maxSpeed
               << " m/s)";
-        failAt(state, cause.str(), s, i, dt);
+        failAt(state, cause.str(), p.species, p.id, dt);
     }
     // A material crushed (or a particle flung) far past anything physical makes the CFL step collapse and
     // the frame stall: stop there instead of crawling on with ever smaller steps.
     const double collapse = settings_.stepCollapse;
     if (collapse > 0.0 && cflAfter < cflBefore / collapse) {
-        const auto [s, i] = stiffestParticle(state);
+        const Culprit p = stiffestParticle(state, *comm_);
         std::ostringstream cause;
         cause << "time step collapsed from " << cflBefore << " s to " << cflAfter
-              << " s in one substep (wave speed or particle speed exploded; J = " << volumeRatioOf(state, s, i) << ")";
-        failAt(state, cause.str(), s, i, dt);
+              << " s in one substep (wave speed or particle speed exploded; J = " << p.J << ")";
+        failAt(state, cause.str(), p.species, p.id, dt);
     }
 }
 
@@ -95,11 +136,11 @@ void StabilityGuard::checkEnergy(SimState& state, const FrameStats& st) const {
     const double own = st.totalEnergy() - ref.work;
     const double rise = own - ref.min;
     if (limit > 0.0 && st.particles > 0 && rise > limit * scale) {
-        const auto [s, i] = fastestParticle(state);
+        const Culprit p = fastestParticle(state, *comm_);
         std::ostringstream cause;
         cause << "total energy rose by " << rise << " J without external work (" << 100.0 * rise / scale
               << "% of the largest kinetic + stored energy; the limit is " << 100.0 * limit << "%); fastest";
-        failAt(state, cause.str(), s, i, 0.0);
+        failAt(state, cause.str(), p.species, p.id, 0.0);
     }
     ref.min = std::min(ref.min, own);
 }

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/Comm.h"
 #include "core/Diagnostics.h"
 #include "core/SimState.h"
 #include "core/Transfer.h"
@@ -52,6 +53,8 @@ public:
         : settings_(settings), gravity_(gravity), dx_(dx) {}
 
     const StabilitySettings& settings() const { return settings_; }
+    /// The ranks the run is spread over: the particle a failure names is the one one process would name.
+    void setComm(const Comm* comm) { comm_ = comm; }
     /// Factor on the CFL step: 1, halved on each retry of the current frame.
     double stepScale() const { return stepScale_; }
 
@@ -103,10 +106,11 @@ private:
 
     StabilitySettings settings_;
     double gravity_, dx_;
+    const Comm* comm_ = &Comm::single();
     double stepScale_ = 1.0;
 };
 
 /// Throws SimulationError: "<cause> at frame F, substep S (t = T s, dt = DT s): particle id I of species NAME".
-[[noreturn]] void failAt(const SimState& state, const std::string& cause, int species, std::size_t particle, double dt);
+[[noreturn]] void failAt(const SimState& state, const std::string& cause, int species, int32_t id, double dt);
 
 }  // namespace mpm

@@ -181,7 +181,7 @@ void zero(const LeafView& leaf, const NodeBox& b) {
 ///  2. each grid leaf adds the halos of the (up to 7) particle leaves below it, in a fixed order, so the
 ///     sums do not depend on the thread count.
 template <class K, bool MLS>
-void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
+void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt, const RemoteHalos* remote) {
     using B = LocalBlock<K>;
     using Range = typename B::Range;
     const std::vector<uint32_t>& leaves = grid.particleLeaves();
@@ -253,7 +253,9 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
         for (int a = own.lo[0]; a < own.hi[0]; ++a)
             for (int b = own.lo[1]; b < own.hi[1]; ++b)
                 for (int c = own.lo[2]; c < own.hi[2]; ++c) {
-                    const f4 v = block[B::index(a, b, c)];
+                    // Added to +0, as the halos are: a sum that starts at +0 is never -0, so the halo parts that hold
+                    // only zeros (a crowded leaf sends its whole block) leave every node's bits as they are.
+                    const f4 v = splat(0.0f) + block[B::index(a, b, c)];
                     const int o = leafOffset(a, b, c);
                     leaf.mass[o] = v[0];
                     leaf.momentum[3 * o + 0] = v[1];
@@ -271,8 +273,39 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
         }
     });
 
+    // Between the passes, on several ranks: parts for leaves another rank owns go there, and parts other
+    // ranks computed for leaves owned here come in; remotePart[8 g + d] is the incoming part d of leaf g.
+    const std::vector<uint8_t>* owned = remote ? remote->owned : nullptr;
+    HaloParts incoming;
+    std::vector<int32_t> remotePart;
+    if (owned) {
+        HaloParts out;
+        for (std::size_t g = 0; g < grid.leafCount(); ++g) {
+            if ((*owned)[g]) continue;
+            const std::array<uint32_t, kNeighbours>& src = grid.sources(g);
+            for (int d = 1; d < kNeighbours; ++d) {
+                if (src[d] == SparseGrid::kNoLeaf) continue;
+                const Range q = halo(src[d], d);
+                const std::size_t n = volume(q);
+                if (n == 0) continue;
+                HaloParts::Part part{leafOfNode(grid.leaf(g).origin), d, {}, {}, out.data.size() / 4};
+                for (int a = 0; a < 3; ++a) part.lo[a] = int8_t(q.lo[a]), part.hi[a] = int8_t(q.hi[a]);
+                const float* from = reinterpret_cast<const float*>(halos + partStart[src[d]][d]);
+                out.data.insert(out.data.end(), from, from + 4 * n);
+                out.parts.push_back(part);
+            }
+        }
+        incoming = remote->exchange(std::move(out));
+        remotePart.assign(kNeighbours * grid.leafCount(), -1);
+        for (std::size_t k = 0; k < incoming.parts.size(); ++k) {
+            const uint32_t g = grid.indexOfLeaf(incoming.parts[k].leaf);
+            remotePart[kNeighbours * std::size_t(g) + std::size_t(incoming.parts[k].d)] = int32_t(k);
+        }
+    }
+
     // Pass 2. Block node (a, b, c) of the particle leaf at offset -d lies in this leaf at (a, b, c) - 8 d.
     forEachLeaf(grid.leafCount(), LeafGrain::Nodes, [&](std::size_t g) {
+        if (owned && !(*owned)[g]) return;  // a ghost: its owner sums it and sends the velocities back
         const LeafView& leaf = grid.leaf(g);
         const std::array<uint32_t, kNeighbours>& src = grid.sources(g);
         NodeBox written;
@@ -281,9 +314,18 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt) {
         else
             written = box(part(range[src[0]], 0), 0);
         for (int d = 1; d < kNeighbours; ++d) {
-            if (src[d] == SparseGrid::kNoLeaf) continue;
-            const f4* in = halos + partStart[src[d]][d];
-            const Range q = halo(src[d], d);
+            const f4* in = nullptr;
+            Range q;
+            if (src[d] != SparseGrid::kNoLeaf) {
+                in = halos + partStart[src[d]][d];
+                q = halo(src[d], d);
+            } else if (owned && remotePart[kNeighbours * g + std::size_t(d)] >= 0) {
+                const HaloParts::Part& part = incoming.parts[std::size_t(remotePart[kNeighbours * g + std::size_t(d)])];
+                in = reinterpret_cast<const f4*>(incoming.data.data()) + part.offset;
+                for (int a = 0; a < 3; ++a) q.lo[a] = part.lo[a], q.hi[a] = part.hi[a];
+            } else {
+                continue;
+            }
             if (volume(q) == 0) continue;
             const int shift[3] = {kLeafDim * neighbourStep(d, 0), kLeafDim * neighbourStep(d, 1), kLeafDim * neighbourStep(d, 2)};
             written.add(box(q, d));
@@ -411,8 +453,9 @@ decltype(auto) withScheme(const TransferSettings& s, F&& f) {
 
 }  // namespace
 
-void particlesToGrid(SparseGrid& grid, std::vector<AnySpecies>& species, const TransferSettings& s, float dt) {
-    withScheme(s, [&]<class K, bool MLS>() { scatterAll<K, MLS>(grid, species, dt); });
+void particlesToGrid(SparseGrid& grid, std::vector<AnySpecies>& species, const TransferSettings& s, float dt,
+                     const RemoteHalos* remote) {
+    withScheme(s, [&]<class K, bool MLS>() { scatterAll<K, MLS>(grid, species, dt, remote); });
 }
 
 G2PSummary gridToParticles(const SparseGrid& grid, std::vector<AnySpecies>& species, const TransferSettings& s, float dt) {

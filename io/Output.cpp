@@ -74,6 +74,10 @@ void FrameWriter::recordStats(const FrameStats& stats) {
 }
 
 void FrameWriter::writeFrame(int frame, const Simulation& sim, const FrameStats& stats) {
+    writeFrame(frame, sim.species(), sim.settings().dx, stats);
+}
+
+void FrameWriter::writeFrame(int frame, const std::vector<AnySpecies>& species, double dx, const FrameStats& stats) {
     const auto start = std::chrono::steady_clock::now();
     const OutputDesc& o = output_;
     VdbFrameRequest r;
@@ -83,7 +87,7 @@ void FrameWriter::writeFrame(int frame, const Simulation& sim, const FrameStats&
     r.surface = o.surface;
     r.density = o.density;
     r.velocity = o.velocity;
-    r.pointVoxelSize = sim.settings().dx;
+    r.pointVoxelSize = dx;
     r.surfaceVoxelSize = particleSpacing_;
     r.surfaceRadius = o.surfaceRadius * particleSpacing_;
     r.surfaceDilate = o.surfaceDilate;  // voxels: the surface voxel is the particle spacing
@@ -92,7 +96,7 @@ void FrameWriter::writeFrame(int frame, const Simulation& sim, const FrameStats&
     r.surfaces = surfaces_;
     r.materialNames = materialSceneNames();
     r.setNames = layout_.setNames;
-    const PointCloud cloud = gatherPoints(sim.species(), layout_.materialOfSpecies, attributes_);
+    const PointCloud cloud = gatherPoints(species, layout_.materialOfSpecies, attributes_);
     if (o.points || o.surface || o.density || o.velocity) writeVdbFrame(r, cloud);
     if (o.ply) writePly(framePath(frame, "", ".ply"), cloud);
     lastWrite_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

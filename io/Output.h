@@ -21,6 +21,8 @@ public:
 
     /// Writes frame files for the current state and appends the stats row.
     void writeFrame(int frame, const Simulation& sim, const FrameStats& stats);
+    /// The same for particles given apart (a run on several ranks gathers them first); dx is the grid's.
+    void writeFrame(int frame, const std::vector<AnySpecies>& species, double dx, const FrameStats& stats);
     /// Bookkeeping rows only (frames outside the requested output range).
     void recordStats(const FrameStats& stats);
 

@@ -1,6 +1,7 @@
 #include "io/Run.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <regex>
@@ -30,6 +31,55 @@ std::regex checkpointsOf(const std::string& scene) { return std::regex("^" + reg
 /// The temporary files this program writes, of any scene (one run per directory: none is in use now).
 const std::regex kTemporary(R"(^(.+_(points_|checkpoint_)?[0-9]{4,}\.(vdb|ply|mpmc)|stats\.csv|scene\.json)\.tmp[0-9]+$)");
 
+/// Runs fn on rank 0 alone (the output directory is its to write) and has every rank throw what it threw,
+/// as the same kind of error, so that all of them stop together and one of them reports it.
+template <class F>
+void onRoot(const Comm& comm, F&& fn) {
+    if (!comm.distributed()) {
+        fn();
+        return;
+    }
+    enum Kind : int32_t { kNone, kScene, kLock, kWrite, kLimit, kOther };
+    int32_t kind = kNone;
+    std::string what, path;
+    std::exception_ptr error;
+    if (comm.rank() == 0) try {
+            fn();
+        } catch (const SceneError& e) {
+            kind = kScene, what = e.what(), error = std::current_exception();
+        } catch (const LockError& e) {
+            kind = kLock, what = e.what(), error = std::current_exception();
+        } catch (const WriteError& e) {
+            kind = kWrite, what = e.what(), path = e.path(), error = std::current_exception();
+        } catch (const LimitExceeded& e) {
+            kind = kLimit, what = e.what(), error = std::current_exception();
+        } catch (const std::exception& e) {
+            kind = kOther, what = e.what(), error = std::current_exception();
+        }
+    Bytes b;
+    if (comm.rank() == 0) {
+        put(b, kind);
+        put(b, uint64_t(path.size()));
+        putArray(b, path.data(), path.size());
+        putArray(b, what.data(), what.size());
+    }
+    b = comm.broadcast(b, 0);
+    ByteReader r{b};
+    kind = r.get<int32_t>();
+    path.resize(r.get<uint64_t>());
+    r.getArray(path.data(), path.size());
+    what.assign(reinterpret_cast<const char*>(b.data()) + r.at, b.size() - r.at);
+    if (error) std::rethrow_exception(error);
+    switch (kind) {
+    case kNone: return;
+    case kScene: throw SceneError(what);
+    case kLock: throw LockError(what);
+    case kWrite: throw WriteError(path, what.size() > path.size() + 2 ? what.substr(path.size() + 2) : what);
+    case kLimit: throw LimitExceeded(what);
+    default: throw std::runtime_error(what);
+    }
+}
+
 }  // namespace
 
 SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents events)
@@ -38,23 +88,38 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     checkBudget(scene_, estimateBudget(scene_, false));
     last_ = options_.lastFrame < 0 ? scene_.frames : options_.lastFrame;
     dir_ = options_.outDir.empty() ? scene_.output.directory : options_.outDir;
-    std::error_code ec;
-    fs::create_directories(dir_, ec);
-    if (ec) throw WriteError(dir_, "cannot create the output directory: " + ec.message());
-    lock_ = std::make_unique<DirectoryLock>(dir_);
-    if (!lock_->takenOverFrom().empty())
-        events_.warning("took over the lock of " + dir_ + " from a run that is gone (" + lock_->takenOverFrom() + ")");
-    removeStaleTemporaries();
+    // On several ranks (mpirun) rank 0 alone owns the directory: it takes the lock and writes every file.
+    const Comm& comm = Comm::world();
+    onRoot(comm, [&] {
+        std::error_code ec;
+        fs::create_directories(dir_, ec);
+        if (ec) throw WriteError(dir_, "cannot create the output directory: " + ec.message());
+        lock_ = std::make_unique<DirectoryLock>(dir_);
+        if (!lock_->takenOverFrom().empty())
+            events_.warning("took over the lock of " + dir_ + " from a run that is gone (" + lock_->takenOverFrom() + ")");
+        removeStaleTemporaries();
+    });
     guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_); });
     layout_ = speciesLayout(scene_);
     identity_ = sceneIdentity(scene_.resolvedJson);
     hash_ = sceneHash(identity_);
     chooseStart();
-    writer_ = std::make_unique<FrameWriter>(scene_, layout_, dir_, statsSoFar_);
+    // Every rank built (or restored) the whole state; each now keeps its leaves' particles.
+    try {
+        sim_->distribute(comm);
+    } catch (const std::invalid_argument& e) {
+        throw SceneError(scene_.file + ": " + e.what() + "; run it as one process (without mpirun)");
+    }
+    onRoot(comm, [&] { writer_ = std::make_unique<FrameWriter>(scene_, layout_, dir_, statsSoFar_); });
     if (start_ == 0) {
         const FrameStats st = sim_->measure();
-        if (options_.firstFrame == 0 && scene_.output.initialFrame) writer_->writeFrame(0, *sim_, st);
-        else writer_->recordStats(st);
+        const bool write = options_.firstFrame == 0 && scene_.output.initialFrame;
+        const std::vector<AnySpecies> all = write && comm.distributed() ? sim_->gatherSpecies() : std::vector<AnySpecies>{};
+        onRoot(comm, [&] {
+            if (!write) writer_->recordStats(st);
+            else if (comm.distributed()) writer_->writeFrame(0, all, sim_->settings().dx, st);
+            else writer_->writeFrame(0, *sim_, st);
+        });
     }
 }
 
@@ -65,6 +130,12 @@ void SceneRun::guarded(const std::string& what, F&& f) {
     try {
         f();
     } catch (const std::bad_alloc&) {
+        const Comm& comm = Comm::world();
+        if (comm.distributed()) {  // this rank alone ran out: the others cannot be told, so all stop now
+            std::fprintf(stderr, "error: rank %d of %d ran out of memory while %s with %zu particles\n", comm.rank(), comm.size(),
+                         what.c_str(), sim_ ? sim_->particleCount() : std::size_t(0));
+            comm.abort(1);
+        }
         const SceneBudget b = estimateBudget(scene_, false);
         std::ostringstream msg;
         msg.precision(3);
@@ -96,7 +167,7 @@ void SceneRun::removeOldOutputs() {
 
 void SceneRun::chooseStart() {
     if (!options_.resume && !options_.framesGiven) {
-        removeOldOutputs();
+        onRoot(Comm::world(), [&] { removeOldOutputs(); });
         sim_->emitDue();
         return;
     }
@@ -142,7 +213,15 @@ void SceneRun::chooseStart() {
 }
 
 void SceneRun::saveCheckpoint() {
-    const SimState& s = sim_->state();
+    // What one process would write: on several ranks the particles are gathered to rank 0 first.
+    const Comm& comm = Comm::world();
+    const SimState gathered = comm.distributed() ? sim_->gatherState() : SimState{};
+    const SimState& s = comm.distributed() ? gathered : sim_->state();
+    lastCheckpoint_ = checkpointPath(dir_, scene_.name, s.frame);
+    onRoot(comm, [&] { writeCheckpointFiles(s); });
+}
+
+void SceneRun::writeCheckpointFiles(const SimState& s) {
     CheckpointInfo info;
     info.format = kCheckpointFormat;
     info.program = std::string("sparse-mpm ") + MPM_VERSION;
@@ -155,11 +234,26 @@ void SceneRun::saveCheckpoint() {
     info.statsCsv = writer_->statsCsv();
     const std::string path = checkpointPath(dir_, scene_.name, s.frame);
     writeCheckpoint(path, info, s);
-    lastCheckpoint_ = path;
     // Keep the newest ones.
     const auto all = listCheckpoints(dir_, scene_.name);
     std::error_code ec;
     for (std::size_t i = std::size_t(scene_.output.checkpointsKept); i < all.size(); ++i) fs::remove(all[i].second, ec);
+}
+
+void SceneRun::reportRanks() {
+    const Comm& comm = Comm::world();
+    if (!comm.distributed()) return;
+    const double mine = double(sim_->particleCount());
+    const double fewest = comm.min(mine), most = comm.max(mine);
+    const double sent = comm.max(double(comm.bytesSent()));
+    const PhaseSeconds& t = sim_->phaseSeconds();
+    const double share = comm.max(t.total() > 0.0 ? t.communication / t.total() : 0.0);
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "%d ranks: %.0f to %.0f particles each at the end; leaves re-cut %d times; at most %.3g MB sent by a rank, "
+                  "at most %.1f%% of a rank's substep time spent communicating",
+                  comm.size(), fewest, most, sim_->rebalanceCount(), sent / 1e6, 100.0 * share);
+    events_.note(line);
 }
 
 void SceneRun::run(const std::atomic<int>* stop) {
@@ -174,19 +268,27 @@ void SceneRun::run(const std::atomic<int>* stop) {
             throw;
         }
         guarded("writing frame " + std::to_string(f), [&] {
-            if (f >= options_.firstFrame) writer_->writeFrame(f, *sim_, st);
-            else writer_->recordStats(st);
+            const Comm& comm = Comm::world();
+            const bool write = f >= options_.firstFrame;
+            const std::vector<AnySpecies> all = write && comm.distributed() ? sim_->gatherSpecies() : std::vector<AnySpecies>{};
+            onRoot(comm, [&] {
+                if (!write) writer_->recordStats(st);
+                else if (comm.distributed()) writer_->writeFrame(f, all, sim_->settings().dx, st);
+                else writer_->writeFrame(f, *sim_, st);
+            });
         });
         // On a stop request a checkpoint is written even when the scene asks for none.
         const bool saved = every > 0 && (f % every == 0 || f == last_);
         if (saved) guarded("writing the checkpoint of frame " + std::to_string(f), [&] { saveCheckpoint(); });
-        events_.frameDone(f, last_, st, f >= options_.firstFrame ? writer_->lastWriteSeconds() : 0.0);
-        // A stop asked for while the frame was written: the state is at a frame boundary.
-        if (stop && stop->load() && f < last_) {
+        events_.frameDone(f, last_, st, f >= options_.firstFrame && writer_ ? writer_->lastWriteSeconds() : 0.0);
+        // A stop asked for while the frame was written: the state is at a frame boundary (every rank agrees).
+        const bool stopAsked = stop && stop->load();
+        if (Comm::world().max(stopAsked ? 1.0f : 0.0f) > 0.0f && f < last_) {
             if (!saved) saveCheckpoint();
             throw Interrupted();
         }
     }
+    reportRanks();
 }
 
 }  // namespace mpm

@@ -61,8 +61,12 @@ private:
     void guarded(const std::string& what, F&& f);
     void chooseStart();
     void saveCheckpoint();
+    /// Rank 0's part of saveCheckpoint: the file, and the older ones removed.
+    void writeCheckpointFiles(const SimState& state);
     void removeStaleTemporaries();
     void removeOldOutputs();
+    /// On several ranks: how the particles ended up spread, the re-cuts and the traffic (a note).
+    void reportRanks();
 
     SceneDesc scene_;
     RunOptions options_;

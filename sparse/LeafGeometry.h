@@ -113,3 +113,24 @@ struct LeafView {
 };
 
 }  // namespace mpm
+
+namespace mpm {
+
+/// The order of leaves everywhere (the grid's leaf list, particle storage, the ranks' ranges): Morton order
+/// of leaf coordinates, x the most significant axis of each bit triple. Coordinates are offset to unsigned
+/// (the grid stays within 2^30 cells, 2^27 leaves, of the origin), and two keys compare by the axis whose
+/// coordinates differ in the highest bit (Chan's trick), so no 84-bit key is built.
+inline bool mortonLess(const Vec3i& a, const Vec3i& b) {
+    constexpr uint32_t kOffset = uint32_t(1) << 30;
+    uint32_t ua[3], ub[3];
+    for (int k = 0; k < 3; ++k) ua[k] = uint32_t(a[k]) + kOffset, ub[k] = uint32_t(b[k]) + kOffset;
+    int axis = 0;
+    uint32_t highest = ua[0] ^ ub[0];
+    for (int k = 1; k < 3; ++k) {
+        const uint32_t diff = ua[k] ^ ub[k];
+        if (highest < diff && highest < (highest ^ diff)) highest = diff, axis = k;
+    }
+    return ua[axis] < ub[axis];
+}
+
+}  // namespace mpm

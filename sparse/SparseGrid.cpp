@@ -1,6 +1,6 @@
 // OpenVDB-backed sparse grid: leaf topology from particles, leaf release, and the counting sort of particles
-// by leaf. Everything here is deterministic: the leaf order comes from the tree's ordered traversal and
-// the particle order from a stable counting sort, whatever the number of threads.
+// by leaf. Everything here is deterministic: leaves in Morton order, the particles of a leaf in id order,
+// whatever the number of threads (or of ranks that each hold a part of the leaves).
 #include "sparse/SparseGrid.h"
 
 #include <openvdb/openvdb.h>
@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <limits>
@@ -112,9 +113,8 @@ SparseGrid::~SparseGrid() = default;
 SparseGrid::SparseGrid(SparseGrid&&) noexcept = default;
 SparseGrid& SparseGrid::operator=(SparseGrid&&) noexcept = default;
 
-void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
+void SparseGrid::collectLeaves(const std::vector<BinRequest>& requests) {
     Trees& t = *trees_;
-
     // 1. Leaves that hold particles, and the leaves their stencils reach (unions of per-task sets; a union
     //    does not depend on the split). A stencil (3 or 4 nodes) is narrower than a leaf (8 nodes), so it
     //    spans at most its own leaf and the next one along each axis.
@@ -126,7 +126,27 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
         t.particleLeaves.topologyUnion(collect.particles);
         t.gridLeaves.topologyUnion(collect.reached);
     }
+}
 
+std::vector<Vec3i> SparseGrid::reachedLeaves() const {
+    std::vector<Vec3i> out;
+    for (auto it = trees_->gridLeaves.cbeginValueOn(); it; ++it) {
+        const openvdb::Coord c = it.getCoord();
+        out.emplace_back(c.x(), c.y(), c.z());
+    }
+    tbb::parallel_sort(out.begin(), out.end(), mortonLess);
+    return out;
+}
+
+void SparseGrid::addReachedLeaves(const std::vector<Vec3i>& leafCoords) {
+    openvdb::tree::ValueAccessor<LeafMaskTree> all(trees_->gridLeaves);
+    for (const Vec3i& c : leafCoords) all.setValueOn(toCoord(c));
+}
+
+uint32_t SparseGrid::indexOfLeaf(const Vec3i& leafCoord) const { return uint32_t(trees_->leafIndex->getValue(toCoord(leafCoord))); }
+
+void SparseGrid::allocateLeaves() {
+    Trees& t = *trees_;
     // 2. Release value-tree leaves no stencil reaches any more, then allocate the new ones.
     std::vector<openvdb::Coord> stale;
     for (auto it = t.mass.cbeginLeaf(); it; ++it) {
@@ -153,8 +173,10 @@ void SparseGrid::updateTopology(const std::vector<BinRequest>& requests) {
         openvdb::tree::ValueAccessor<LeafIndexTree> idx(*t.leafIndex);
         openvdb::tree::ValueAccessor<MassTree> massAcc(t.mass);
         openvdb::tree::ValueAccessor<MomentumTree> momAcc(t.momentum);
-        for (auto it = t.gridLeaves.cbeginValueOn(); it; ++it) {
-            const openvdb::Coord c = it.getCoord();
+        // Leaves in Morton order (the tree's own traversal is x-major inside each internal node): the order a
+        // domain is cut into ranks' ranges, so that the ranks' particles, one after another, are one process's.
+        for (const Vec3i& leafCoord : reachedLeaves()) {
+            const openvdb::Coord c = toCoord(leafCoord);
             const openvdb::Coord origin(c.x() << kLeafLog2, c.y() << kLeafLog2, c.z() << kLeafLog2);
             idx.setValue(c, int32_t(leaves_.size()));
             auto* m = massAcc.touchLeaf(origin);
@@ -258,6 +280,21 @@ void SparseGrid::sortParticles(std::vector<BinRequest>& requests) {
             const std::size_t end = std::min(N, (c + 1) * chunkSize);
             for (std::size_t i = c * chunkSize; i < end; ++i) dest[i] = next[dest[i]]++;
         });
+        // Inside a leaf, particles by id: the stable sort keeps the order they came in, which on several ranks
+        // depends on where each came from. A leaf that no particle entered is in id order already.
+        const std::vector<int32_t>& id = *r.ids;
+        slotOwner_.resize(N);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, N, kScanGrain), [&](const auto& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) slotOwner_[dest[i]] = uint32_t(i);
+        });
+        forEachLeaf(L, LeafGrain::Particles, [&](std::size_t l) {
+            uint32_t* first = slotOwner_.data() + start[l];
+            uint32_t* last = slotOwner_.data() + start[l + 1];
+            auto byId = [&](uint32_t a, uint32_t b) { return id[a] < id[b]; };
+            if (std::is_sorted(first, last, byId)) return;
+            std::sort(first, last, byId);
+            for (uint32_t* s = first; s != last; ++s) dest[*s] = start[l] + uint32_t(s - first);
+        });
     }
 }
 
@@ -268,15 +305,18 @@ std::size_t SparseGrid::memoryBytes() const {
            leaves_.capacity() * sizeof(LeafView) + neighbours_.capacity() * sizeof(std::array<uint32_t, kNeighbours>) +
            sources_.capacity() * sizeof(std::array<uint32_t, kNeighbours>) + transferScratch_.capacity() * sizeof(float) +
            (written_.capacity() + writtenBefore_.capacity()) * sizeof(NodeBox) + std::size_t(t.previousIndex->memUsage()) +
-           histogram_.capacity() * sizeof(uint32_t) + leafCount_.capacity() * sizeof(uint32_t);
+           (histogram_.capacity() + slotOwner_.capacity()) * sizeof(uint32_t) + leafCount_.capacity() * sizeof(uint32_t);
+}
+
+std::size_t SparseGrid::bytesPerLeaf() {
+    return sizeof(MassTree::LeafNodeType) + sizeof(MomentumTree::LeafNodeType) + sizeof(LeafView) +
+           2 * sizeof(std::array<uint32_t, kNeighbours>) + 2 * sizeof(NodeBox);
 }
 
 std::size_t SparseGrid::contentBytes() const {
     // From the leaf count alone, so that the number depends on where the particles are, not on the history
     // of the trees and buffers (a resumed run reports what an uninterrupted one does).
-    const std::size_t perLeaf = sizeof(MassTree::LeafNodeType) + sizeof(MomentumTree::LeafNodeType) + sizeof(LeafView) +
-                                2 * sizeof(std::array<uint32_t, kNeighbours>) + 2 * sizeof(NodeBox);
-    return leaves_.size() * perLeaf;
+    return leaves_.size() * bytesPerLeaf();
 }
 
 std::size_t SparseGrid::allocatedLeaves() const { return std::size_t(trees_->mass.leafCount()); }

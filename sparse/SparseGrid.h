@@ -16,6 +16,7 @@ namespace mpm {
 /// What binning needs to know about one group of particles (a species), and what it hands back.
 struct BinRequest {
     const std::vector<Vec3d>* positions = nullptr;  ///< in: particle positions
+    const std::vector<int32_t>* ids = nullptr;      ///< in: particle ids, the order inside a leaf
     std::vector<uint32_t>* destination = nullptr;   ///< out: sorted slot of each particle
     std::vector<uint32_t>* leafStart = nullptr;     ///< out: leafCount()+1 offsets
 };
@@ -41,10 +42,26 @@ public:
         updateTopology(requests);
         sortParticles(requests);
     }
-    /// The first half of rebuild: the leaf set and its neighbour tables ("topology update").
-    void updateTopology(const std::vector<BinRequest>& requests);
-    /// The second half: the counting sort of each species by leaf ("binning"); needs updateTopology first.
+    /// The first half of rebuild: the leaf set and its neighbour tables ("topology update"); collectLeaves
+    /// then allocateLeaves.
+    void updateTopology(const std::vector<BinRequest>& requests) {
+        collectLeaves(requests);
+        allocateLeaves();
+    }
+    /// The leaves that hold particles and the leaves their stencils reach.
+    void collectLeaves(const std::vector<BinRequest>& requests);
+    /// The leaf coordinates collectLeaves found reached (particle leaves included), in leaf order.
+    std::vector<Vec3i> reachedLeaves() const;
+    /// Adds leaves (by leaf coordinate) that stencils of particles held elsewhere reach (another rank's).
+    void addReachedLeaves(const std::vector<Vec3i>& leafCoords);
+    /// Allocates the collected leaves in leaf order (Morton, LeafGeometry.h), releases the others, and builds
+    /// the neighbour tables.
+    void allocateLeaves();
+    /// The second half: the counting sort of each species by leaf ("binning"), particles of one leaf in id
+    /// order, so that the order is a function of the leaves and ids alone; needs updateTopology first.
     void sortParticles(std::vector<BinRequest>& requests);
+    /// The index of the leaf at a leaf coordinate, or kNoLeaf (safe to call from many threads).
+    uint32_t indexOfLeaf(const Vec3i& leafCoord) const;
 
     std::size_t leafCount() const { return leaves_.size(); }
     const LeafView& leaf(std::size_t i) const { return leaves_[i]; }
@@ -70,6 +87,8 @@ public:
     /// Bytes of the grid's leaves (mass and momentum) and per-leaf tables: a function of the particles' places
     /// alone, not of the run's history (stats.csv reports it, and a resumed run must report the same).
     std::size_t contentBytes() const;
+    /// contentBytes() per leaf.
+    static std::size_t bytesPerLeaf();
     /// Number of leaves allocated in the trees (equals leafCount() after rebuild).
     std::size_t allocatedLeaves() const;
 
@@ -89,6 +108,7 @@ private:
     std::vector<uint32_t> histogram_;
     std::vector<uint32_t> leafCount_;  ///< particles per leaf, for the parallel prefix sum
     std::vector<uint8_t> hasParticles_;
+    std::vector<uint32_t> slotOwner_;  ///< sortParticles: the particle at each sorted slot
 };
 
 }  // namespace mpm

@@ -8,7 +8,8 @@ PKGS=(cmake g++ make ccache pkg-config clang-14 libclang-rt-14-dev libassimp-dev
       libopenvdb-dev libboost-iostreams-dev python3-imath
       libeigen3-dev libtbb-dev libblosc-dev
       libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev
-      libopenvdb-tools python3 python3-matplotlib python3-dev python3-numpy pybind11-dev)
+      libopenvdb-tools python3 python3-matplotlib python3-dev python3-numpy pybind11-dev
+      libopenmpi-dev openmpi-bin)
 if [ "${1:-}" = "--with-blender" ]; then PKGS+=(blender); fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq

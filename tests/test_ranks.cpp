@@ -1,0 +1,120 @@
+// The same run on many processes (docs/distributed.md): `mpirun -np N mpm run SCENE` on loopback must write
+// the bits one process writes, for any rank and thread count; rebalancing must not change them; a blow-up is
+// reported once and every rank exits 1; a checkpoint written by 2 ranks resumes on 3.
+#include <gtest/gtest.h>
+
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "ProgramRuns.h"
+
+using namespace mpm::test;
+
+namespace {
+
+#ifdef MPM_MPIEXEC
+constexpr const char* kMpiexec = MPM_MPIEXEC;
+#else
+constexpr const char* kMpiexec = nullptr;
+#endif
+
+/// Water and jelly crossing the ranks' boundaries (the water runs +x through the jelly ball's range), a
+/// floor and a sphere with friction, an emitter of whole sets and a continuous source.
+const std::string kScene = std::string(MPM_SOURCE_DIR) + "/tests/scenes/ranks_mix.json";
+
+/// mpm on `ranks` processes (mpirun on loopback; root allowed, as in CI; more ranks than cores allowed).
+Result runRanks(int ranks, std::vector<std::string> args, const std::string& dir) {
+    std::vector<std::string> all{"--allow-run-as-root", "--oversubscribe", "-np", std::to_string(ranks), MPM_BINARY};
+    all.insert(all.end(), args.begin(), args.end());
+    Child c = start(all, dir + "/mpirun.log", kMpiexec);
+    const int code = c.wait();
+    return {code, c.output()};
+}
+
+/// The particles per rank that a run's closing note reports, fewest and most.
+std::pair<long, long> spread(const std::string& log) {
+    std::smatch m;
+    if (!std::regex_search(log, m, std::regex(R"(ranks: ([0-9]+) to ([0-9]+) particles each)"))) return {-1, -1};
+    return {std::stol(m[1]), std::stol(m[2])};
+}
+int recuts(const std::string& log) {
+    std::smatch m;
+    return std::regex_search(log, m, std::regex(R"(leaves re-cut ([0-9]+) times)")) ? std::stoi(m[1]) : -1;
+}
+
+int count(const std::string& text, const std::string& what) {
+    int n = 0;
+    for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+}
+
+#define REQUIRE_MPI() \
+    if (!kMpiexec) GTEST_SKIP() << "built without MPI"
+
+}  // namespace
+
+TEST(Ranks, OneTwoAndThreeRanksWriteTheSameBitsAndRebalancingKeepsThem) {
+    REQUIRE_MPI();
+    const std::string dir = tempDir("ranks");
+    ASSERT_EQ(runMpm({"run", kScene, "-o", dir + "/one", "--threads", "2", "--quiet"}, dir).code, 0);
+    for (int ranks : {2, 3}) {
+        const std::string out = dir + "/ranks" + std::to_string(ranks);
+        const Result r = runRanks(ranks, {"run", kScene, "-o", out, "--threads", "1"}, dir);
+        ASSERT_EQ(r.code, 0) << r.output;
+        // Really spread: every rank held a share, and the water's motion made the ranks re-cut their leaves.
+        const auto [fewest, most] = spread(r.output);
+        EXPECT_GT(fewest, 0) << r.output;
+        EXPECT_GT(most, 0) << r.output;
+        EXPECT_GE(recuts(r.output), 1) << r.output;
+        // Rank 0 speaks for all: the opening line once.
+        EXPECT_EQ(count(r.output, "mpm: " + kScene), 1) << r.output;
+        expectSameOutput(dir + "/one", out, "ranks_mix", 18);
+    }
+}
+
+TEST(Ranks, ABlowUpOnOneRankIsReportedOnceAndEveryRankExitsOne) {
+    REQUIRE_MPI();
+    const std::string dir = tempDir("ranks_blowup");
+    // Two blocks of equal size far apart, one rank each: at five times the stable CFL number of the stiff one
+    // (no retries) only the stiff block blows up, on its rank alone; the soft one is far inside its limit.
+    const std::string scene = writeFile(dir + "/blowup.json", R"({
+      "simulation": { "frames": 3, "dx": 0.05, "substeps": 1, "cfl": 5 },
+      "sets": [ { "name": "soft", "material": "water", "shape": { "type": "box", "min": [0, 0, 0], "max": [0.6, 0.3, 0.3] } },
+                { "name": "stiff", "material": "water", "material_params": { "bulk_modulus": 1e7 },
+                  "shape": { "type": "box", "min": [3, 0, 0], "max": [3.6, 0.3, 0.3] } } ],
+      "colliders": [ { "type": "plane" } ] })");
+    const Result one = runMpm({"run", scene, "-o", dir + "/one", "--quiet"}, dir);
+    ASSERT_EQ(one.code, 1) << one.output;
+    // Each rank says how it ended.
+    const std::string each = std::string(MPM_BINARY) + " run " + scene + " -o " + dir + "/two --quiet --threads 1; c=$?; echo rank exit $c; exit $c";
+    std::vector<std::string> args{"--allow-run-as-root", "--oversubscribe", "-np", "2", "/bin/sh", "-c", each};
+    Child c = start(args, dir + "/mpirun.log", kMpiexec);
+    const int code = c.wait();
+    const std::string out = c.output();
+    EXPECT_EQ(count(out, "rank exit 1"), 2) << out;
+    EXPECT_EQ(count(out, "rank exit"), 2) << out;
+    EXPECT_EQ(code, 1) << out;
+    EXPECT_EQ(count(out, "error: simulation stopped"), 1) << out;
+    // The same particle, substep and cause as one process names.
+    const auto line = [](const std::string& s) {
+        const std::size_t at = s.find("error: simulation stopped");
+        return at == std::string::npos ? std::string() : s.substr(at, s.find('\n', at) - at);
+    };
+    EXPECT_EQ(line(out), line(one.output));
+    EXPECT_NE(line(one.output).find("of species stiff"), std::string::npos) << one.output;
+}
+
+TEST(Ranks, ACheckpointOfTwoRanksResumesOnThreeWithTheBitsOfAnUninterruptedRun) {
+    REQUIRE_MPI();
+    const std::string dir = tempDir("ranks_resume");
+    ASSERT_EQ(runMpm({"run", kScene, "-o", dir + "/one", "--quiet"}, dir).code, 0);
+    const std::string out = dir + "/split";
+    // Frames 1-3 on two ranks (the scene checkpoints at frame 3), then the rest on three.
+    const Result first = runRanks(2, {"run", kScene, "-o", out, "--frames", "0:3", "--quiet", "--threads", "1"}, dir);
+    ASSERT_EQ(first.code, 0) << first.output;
+    const Result second = runRanks(3, {"run", kScene, "-o", out, "--resume", "--threads", "1"}, dir);
+    ASSERT_EQ(second.code, 0) << second.output;
+    EXPECT_NE(second.output.find("continuing from"), std::string::npos) << second.output;
+    expectSameOutput(dir + "/one", out, "ranks_mix", 18);
+}
