@@ -186,6 +186,42 @@ std::vector<std::string> measureOutput(const Options& o) {
     return rows;
 }
 
+/// One timed run on the ranks this program was started on (mpirun -np N mpm_bench ranks ...): the same
+/// scene built on every rank and spread over them, as `mpm run` does. Rank 0 prints one row: PSS of the whole
+/// run from the median substep, and over the ranks the most bytes sent per substep, the largest share of a
+/// substep spent communicating, the ghost leaves' share of a rank's leaves and of its memory, and the
+/// imbalance (most particles on a rank over the mean).
+std::string measureRanks(const Options& o) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(o.threads));
+    const Comm& comm = Comm::world();
+    auto sim = makeScene(o.scene);
+    const double n = double(sim->particleCount());
+    sim->distribute(comm);
+    for (int s = 0; s < o.warmup; ++s) sim->substep(kTargetDt);
+    sim->resetPhaseSeconds();
+    Comm::world().resetCounters();
+    std::vector<double> each;
+    for (int s = 0; s < o.substeps; ++s) {
+        const auto t0 = std::chrono::steady_clock::now();
+        sim->substep(kTargetDt);
+        each.push_back(comm.max(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()));
+    }
+    const double sec = std::accumulate(each.begin(), each.end(), 0.0);
+    const PhaseSeconds& ph = sim->phaseSeconds();
+    const double sent = comm.max(double(comm.bytesSent()) / o.substeps);
+    const double commShare = comm.max(ph.total() > 0.0 ? ph.communication / ph.total() : 0.0);
+    const double leaves = double(sim->grid().leafCount()), ghosts = double(sim->ghostLeafCount());
+    const double ghostLeafShare = comm.max(leaves > 0.0 ? ghosts / leaves : 0.0);
+    const double ghostMemoryShare = comm.max(ghosts * double(SparseGrid::bytesPerLeaf()) / procStatusBytes("VmRSS:"));
+    const double mine = double(sim->particleCount());
+    const double imbalance = comm.max(mine) / (n / comm.size());
+    std::ostringstream row;
+    row << "ranks," << o.scene.material << ',' << long(n) << ',' << comm.size() << ',' << o.threads << ',' << o.substeps << ',' << sec
+        << ',' << n / median(each) << ',' << sent << ',' << commShare << ',' << ghostLeafShare << ',' << ghostMemoryShare << ','
+        << imbalance << ',' << sim->rebalanceCount();
+    return row.str();
+}
+
 /// Runs this program again with `args` and returns the rows it printed.
 std::vector<std::string> runChild(const std::string& args) {
     const std::string cmd = std::filesystem::read_symlink("/proc/self/exe").string() + " " + args;
@@ -284,13 +320,25 @@ int main(int argc, char** argv) {
     one->add_option("--experiment", o.experiment, "label of the row; \"paired\": 1 thread and --threads interleaved");
     one->add_option("--substeps", o.substeps, "timed substeps")->check(CLI::PositiveNumber);
     one->add_option("--warmup", o.warmup, "untimed substeps first");
+    CLI::App* ranks = app.add_subcommand("ranks", "one timed run over the ranks of mpirun -np N; rank 0 prints one CSV row");
+    addScene(ranks);
+    ranks->add_option("--substeps", o.substeps, "timed substeps")->check(CLI::PositiveNumber);
+    ranks->add_option("--warmup", o.warmup, "untimed substeps first");
     CLI::App* output = app.add_subcommand("output", "time writing one frame's points and surface");
     addScene(output);
     CLI::App* all = app.add_subcommand("suite", "every experiment, each in its own process, into DIR/perf.csv");
     all->add_option("-o,--out", outDir, "output directory");
     all->add_flag("--quick", quick, "1e5 instead of 1e6 particles, no runs above 1e6 (a smoke run)");
+    Comm::start(&argc, &argv);
+    struct Finish {
+        ~Finish() { Comm::finish(); }
+    } finish;
     CLI11_PARSE(app, argc, argv);
     try {
+        if (*ranks) {
+            const std::string row = measureRanks(o);
+            if (Comm::world().rank() == 0) std::printf("row,%s\n", row.c_str());
+        }
         o.scene.kernel = o.kernel == "cubic" ? Interpolation::Cubic : Interpolation::Quadratic;
         if (*one && o.experiment == "paired")
             for (const std::string& r : measurePaired(o)) std::printf("row,%s\n", r.c_str());

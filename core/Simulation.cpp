@@ -670,16 +670,22 @@ void keepWhere(S& sp, const std::vector<uint8_t>& keep) {
         arr.resize(k);
     });
 }
-/// Appends the flagged particles of a species to a byte buffer: their count, then array by array.
+/// Appends particles `which` of a species to a byte buffer: their count, then array by array.
 template <class S>
-void packWhere(const S& sp, const std::vector<int>& owner, int to, Bytes& b) {
-    uint64_t n = 0;
-    for (int o : owner) n += o == to;
-    put(b, n);
+void pack(const S& sp, const std::vector<uint32_t>& which, Bytes& b) {
+    put(b, uint64_t(which.size()));
     sp.forEachArray([&](const auto& arr) {
-        for (std::size_t i = 0; i < arr.size(); ++i)
-            if (owner[i] == to) put(b, arr[i]);
+        using T = typename std::decay_t<decltype(arr)>::value_type;
+        const std::size_t at = b.size();
+        b.resize(at + which.size() * sizeof(T));
+        for (std::size_t k = 0; k < which.size(); ++k) std::memcpy(b.data() + at + k * sizeof(T), static_cast<const void*>(&arr[which[k]]), sizeof(T));
     });
+}
+/// The particles [begin, end) of a species.
+std::vector<uint32_t> range(std::size_t begin, std::size_t end) {
+    std::vector<uint32_t> r(end - begin);
+    for (std::size_t i = begin; i < end; ++i) r[i - begin] = uint32_t(i);
+    return r;
 }
 template <class S>
 void unpackAppend(S& sp, ByteReader& r) {
@@ -747,6 +753,7 @@ void Simulation::distribute(const Comm& comm) {
                 for (std::size_t i = 0; i < keep.size(); ++i)
                     keep[i] = ownerOf(leafOfNode(fields_[0].baseNode(sp.p.x[i]))) == comm.rank();
                 keepWhere(sp, keep);
+                sp.forEachArray([](auto& arr) { arr.shrink_to_fit(); });  // the whole scene's memory goes back
                 sp.leafStart.clear();
             },
             s);
@@ -793,8 +800,17 @@ void Simulation::migrateParticles() {
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, owner.size(), kPermuteGrain), [&](const auto& r) {
                     for (std::size_t i = r.begin(); i < r.end(); ++i) owner[i] = ownerOf(leafOfNode(fields_[0].baseNode(sp.p.x[i])));
                 });
-                for (int r = 0; r < R; ++r)
-                    if (r != me) packWhere(sp, owner, r, out[std::size_t(r)]);
+                // Few leave in a substep (those crossing a range's boundary): pack and compact only when some do.
+                std::vector<std::vector<uint32_t>> leaving(static_cast<std::size_t>(R));
+                for (std::size_t i = 0; i < owner.size(); ++i)
+                    if (owner[i] != me) leaving[std::size_t(owner[i])].push_back(uint32_t(i));
+                bool any = false;
+                for (int r = 0; r < R; ++r) {
+                    if (r == me) continue;
+                    pack(sp, leaving[std::size_t(r)], out[std::size_t(r)]);
+                    any = any || !leaving[std::size_t(r)].empty();
+                }
+                if (!any) return;
                 std::vector<uint8_t> keep(owner.size());
                 for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = owner[i] == me;
                 keepWhere(sp, keep);
@@ -900,11 +916,9 @@ std::vector<AnySpecies> Simulation::gatherSpecies() const {
             [&](const auto& sp) {
                 using S = std::decay_t<decltype(sp)>;
                 const std::size_t binned = sp.leafStart.empty() ? 0 : std::min<std::size_t>(sp.leafStart.back(), sp.p.size());
-                std::vector<int> part(sp.p.size(), 0);
-                for (std::size_t i = binned; i < part.size(); ++i) part[i] = 1;
                 Bytes b;
-                packWhere(sp, part, 0, b);
-                packWhere(sp, part, 1, b);
+                pack(sp, range(0, binned), b);
+                pack(sp, range(binned, sp.p.size()), b);
                 const std::vector<Bytes> all = comm_->gatherToRoot(b);
                 S whole;
                 whole.name = sp.name;
@@ -925,9 +939,8 @@ std::vector<AnySpecies> Simulation::gatherSpecies() const {
                         for (uint32_t i : order) sorted.push_back(arr[i]);
                         arr.swap(sorted);
                     });
-                    std::vector<int> all0(late.p.size(), 0);
                     Bytes lateBytes;
-                    packWhere(late, all0, 0, lateBytes);
+                    pack(late, range(0, late.p.size()), lateBytes);
                     ByteReader r{lateBytes};
                     unpackAppend(whole, r);
                 }

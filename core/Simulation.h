@@ -5,6 +5,7 @@
 //  - the state (core/SimState.h): where the run is, one value that a retry copies and a checkpoint writes;
 //  - the step caches: the grid, the sort permutations, the permutation buffer, rebuilt from the state;
 //  - the stability guard (core/Stability.h) and the phase timings.
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <limits>
@@ -185,6 +186,8 @@ public:
     SimState gatherState();
     /// Times the ranks re-cut their leaves since the start of this process.
     int rebalanceCount() const { return rebalances_; }
+    /// Leaves this rank holds as ghosts of other ranks' (0 on one process).
+    std::size_t ghostLeafCount() const { return partitioned_ ? owned_.size() - std::size_t(std::count(owned_.begin(), owned_.end(), uint8_t(1))) : 0; }
     /// The rank owning a leaf (by leaf coordinate).
     int ownerOf(const Vec3i& leafCoord) const;
     float kernelInertiaScale() const;

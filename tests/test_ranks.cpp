@@ -118,3 +118,37 @@ TEST(Ranks, ACheckpointOfTwoRanksResumesOnThreeWithTheBitsOfAnUninterruptedRun) 
     EXPECT_NE(second.output.find("continuing from"), std::string::npos) << second.output;
     expectSameOutput(dir + "/one", out, "ranks_mix", 18);
 }
+
+TEST(Ranks, RetriedFramesRestartOnEveryRankAlike) {
+    REQUIRE_MPI();
+    const std::string dir = tempDir("ranks_retry");
+    // Too long a step for the stiff water: its first frames are retried with half the step, on every rank.
+    const std::string scene = writeFile(dir + "/retry.json", R"({
+      "simulation": { "frames": 2, "dx": 0.05, "substeps": 1, "cfl": 5, "retries": 5 },
+      "output": { "ply": true },
+      "sets": [ { "material": "water", "material_params": { "bulk_modulus": 1e7 },
+                  "shape": { "type": "box", "min": [0, 0, 0], "max": [0.6, 0.3, 0.3] } } ],
+      "colliders": [ { "type": "plane" } ] })");
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/one", "--quiet"}, dir).code, 0);
+    const Result r = runRanks(2, {"run", scene, "-o", dir + "/two", "--quiet", "--threads", "1"}, dir);
+    ASSERT_EQ(r.code, 0) << r.output;
+    expectSameOutput(dir + "/one", dir + "/two", "retry", 4);
+    const std::string stats = readFile(dir + "/two/stats.csv");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(stats, m, std::regex(R"(\n1,[^\n]*,[0-9]+,([0-9]+),[^,]*,[^,]*,[^,]*\n)"))) << stats;
+    EXPECT_GT(std::stoi(m[1]), 0) << "frame 1 should have been retried: " << stats;
+}
+
+TEST(Ranks, WhatRunsOnOneRankOnlyIsRefusedWithExitTwo) {
+    REQUIRE_MPI();
+    const std::string dir = tempDir("ranks_refused");
+    for (const char* key : {R"("contact": "multi_field")", R"("wall_ghosts": "mirror")"}) {
+        const std::string scene = writeFile(dir + "/one_rank.json", std::string(R"({ "simulation": { "frames": 1, )") + key + R"( },
+          "sets": [ { "material": "jelly", "shape": { "type": "sphere", "center": [0, 0.2, 0], "radius": 0.1 } } ],
+          "colliders": [ { "type": "plane", "boundary": "sticky" } ] })");
+        const Result r = runRanks(2, {"run", scene, "-o", dir + "/out", "--quiet", "--threads", "1"}, dir);
+        EXPECT_EQ(r.code, 2) << r.output;
+        EXPECT_EQ(count(r.output, "runs on one rank only"), 1) << r.output;
+        EXPECT_NE(r.output.find(dir + "/one_rank.json"), std::string::npos) << r.output;
+    }
+}
