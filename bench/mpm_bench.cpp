@@ -212,7 +212,11 @@ std::string measureRanks(const Options& o) {
     const double commShare = comm.max(ph.total() > 0.0 ? ph.communication / ph.total() : 0.0);
     const double leaves = double(sim->grid().leafCount()), ghosts = double(sim->ghostLeafCount());
     const double ghostLeafShare = comm.max(leaves > 0.0 ? ghosts / leaves : 0.0);
-    const double ghostMemoryShare = comm.max(ghosts * double(SparseGrid::bytesPerLeaf()) / procStatusBytes("VmRSS:"));
+    // A rank's memory: its particles' arrays and its grid (ghost leaves included).
+    double held = double(sim->grid().memoryBytes());
+    for (const AnySpecies& sp : sim->species())
+        std::visit([&](const auto& x) { x.forEachArray([&](const auto& arr) { held += double(arr.capacity() * sizeof(arr[0])); }); }, sp);
+    const double ghostMemoryShare = comm.max(ghosts * double(SparseGrid::bytesPerLeaf()) / held);
     const double mine = double(sim->particleCount());
     const double imbalance = comm.max(mine) / (n / comm.size());
     std::ostringstream row;

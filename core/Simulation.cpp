@@ -434,7 +434,13 @@ void Simulation::scatter(float dt) {
             }
             const std::vector<Bytes> received = comm_->exchange(send);
             HaloParts in;
-            for (const Bytes& b : received) {
+            // What each rank's stencils read of a ghost leaf is what its parts wrote there: the velocities go
+            // back for that box alone, not for all the owner wrote.
+            ghostBoxFor_.assign(received.size(), {});
+            for (std::size_t from = 0; from < received.size(); ++from) {
+                const Bytes& b = received[from];
+                const std::vector<Vec3i>& coords = ghostCoordsFor_[from];
+                ghostBoxFor_[from].assign(coords.size(), NodeBox{});
                 ByteReader r{b};
                 while (!r.done()) {
                     HaloParts::Part part;
@@ -442,6 +448,16 @@ void Simulation::scatter(float dt) {
                     part.d = r.get<int32_t>();
                     r.getArray(part.lo, 3);
                     r.getArray(part.hi, 3);
+                    const auto at = std::lower_bound(coords.begin(), coords.end(), part.leaf, mortonLess);
+                    if (at != coords.end() && *at == part.leaf) {
+                        NodeBox box;
+                        for (int a = 0; a < 3; ++a) {
+                            const int shift = kLeafDim * neighbourStep(part.d, a);
+                            box.lo[a] = int8_t(part.lo[a] - shift);
+                            box.hi[a] = int8_t(part.hi[a] - shift);
+                        }
+                        ghostBoxFor_[from][std::size_t(at - coords.begin())].add(box);
+                    }
                     const std::size_t n = r.get<uint64_t>();
                     part.offset = in.data.size() / 4;
                     in.data.resize(in.data.size() + 4 * n);
@@ -857,8 +873,9 @@ void Simulation::sendGhostVelocities(SparseGrid& grid) {
     for (int r = 0; r < R; ++r) {
         if (r == me) continue;
         Bytes& b = out[std::size_t(r)];
-        for (uint32_t l : ghostsFor_[std::size_t(r)]) {
-            const NodeBox& box = grid.writtenBox(l);
+        for (std::size_t k = 0; k < ghostsFor_[std::size_t(r)].size(); ++k) {
+            const uint32_t l = ghostsFor_[std::size_t(r)][k];
+            const NodeBox& box = ghostBoxFor_[std::size_t(r)][k];
             putArray(b, box.lo, 3);
             putArray(b, box.hi, 3);
             const float* v = grid.leaf(l).momentum;
