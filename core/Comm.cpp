@@ -40,7 +40,16 @@ const Comm& Comm::single() {
 
 #ifdef MPM_HAVE_MPI
 
+/// Whether a launcher (mpirun, mpiexec, srun) started this process: OpenMPI and PMI/PMIx set these. Started
+/// alone, the program does not initialise MPI: an MPI singleton costs about half a second of start-up.
+bool launchedByMpi() {
+    for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE", "PMI_RANK"})
+        if (std::getenv(v)) return true;
+    return false;
+}
+
 void Comm::start(int* argc, char*** argv) {
+    if (!launchedByMpi()) return;
     int provided = 0;
     // Only the main thread calls MPI; the threads of a rank (oneTBB) never do.
     MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
