@@ -309,8 +309,10 @@ std::size_t SparseGrid::memoryBytes() const {
 }
 
 std::size_t SparseGrid::bytesPerLeaf() {
-    return sizeof(MassTree::LeafNodeType) + sizeof(MomentumTree::LeafNodeType) + sizeof(LeafView) +
-           2 * sizeof(std::array<uint32_t, kNeighbours>) + 2 * sizeof(NodeBox);
+    // A leaf node holds its values in a buffer of its own: 512 masses and 512 momenta beside the node.
+    return sizeof(MassTree::LeafNodeType) + sizeof(MomentumTree::LeafNodeType) + MassTree::LeafNodeType::SIZE * sizeof(float) +
+           MomentumTree::LeafNodeType::SIZE * sizeof(openvdb::Vec3s) + sizeof(LeafView) + 2 * sizeof(std::array<uint32_t, kNeighbours>) +
+           2 * sizeof(NodeBox);
 }
 
 std::size_t SparseGrid::contentBytes() const {

@@ -10,7 +10,8 @@ build=${1:-build}
 out=${2:-docs/performance}
 repeats=${3:-3}
 bench="$build/bench/mpm_bench"
-mpirun=(mpirun --allow-run-as-root --oversubscribe)
+# --bind-to none: by default OpenMPI binds each of up to 2 ranks to one core, and a rank's threads would share it.
+mpirun=(mpirun --allow-run-as-root --oversubscribe --bind-to none)
 mkdir -p "$out"
 raw=$(mktemp)
 configs=(
