@@ -759,8 +759,25 @@ void Simulation::distribute(const Comm& comm) {
         throw std::invalid_argument("simulation.contact = \"multi_field\" runs on one rank only for now");
     if (settings_.wallGhosts == WallGhosts::Mirror)
         throw std::invalid_argument("simulation.wall_ghosts = \"mirror\" runs on one rank only for now");
-    // Every rank holds every particle here, so each computes the same cut from its own counts.
-    cutLeaves(particlesPerLeaf());
+    // Every rank holds every particle here, and the same emitters, so each computes the same cut from its own
+    // counts: those of the particles, and of the sets about to be emitted at this frame. Called before the
+    // first emission, no rank ever holds the whole scene's particles, only its share.
+    std::vector<std::pair<Vec3i, long long>> counts = particlesPerLeaf();
+    if (state_.emittedFrame != state_.frame) {
+        std::vector<Vec3i> due;
+        for (const Emitter& e : emitters_)
+            if (e.emitsAt(state_.frame))
+                for (const Vec3d& x : e.positions) due.push_back(leafOfNode(fields_[0].baseNode(x)));
+        for (const auto& [c, n] : counts)
+            for (long long k = 0; k < n; ++k) due.push_back(c);
+        tbb::parallel_sort(due.begin(), due.end(), mortonLess);
+        counts.clear();
+        for (const Vec3i& c : due) {
+            if (counts.empty() || counts.back().first != c) counts.emplace_back(c, 0);
+            ++counts.back().second;
+        }
+    }
+    cutLeaves(counts);
     partitioned_ = true;
     for (AnySpecies& s : state_.species)
         std::visit(

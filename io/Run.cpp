@@ -85,7 +85,7 @@ void onRoot(const Comm& comm, F&& fn) {
 SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents events)
     : scene_(loadScene(scenePath)), options_(std::move(options)), events_(std::move(events)) {
     // Budgets before work: a scene that cannot run here fails now, with the estimate and what to change.
-    checkBudget(scene_, estimateBudget(scene_, false));
+    checkBudget(scene_, estimateBudget(scene_, false, Comm::world().size()));
     last_ = options_.lastFrame < 0 ? scene_.frames : options_.lastFrame;
     dir_ = options_.outDir.empty() ? scene_.output.directory : options_.outDir;
     // On several ranks (mpirun) rank 0 alone owns the directory: it takes the lock and writes every file.
@@ -104,12 +104,6 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     identity_ = sceneIdentity(scene_.resolvedJson);
     hash_ = sceneHash(identity_);
     chooseStart();
-    // Every rank built (or restored) the whole state; each now keeps its leaves' particles.
-    try {
-        sim_->distribute(comm);
-    } catch (const std::invalid_argument& e) {
-        throw SceneError(scene_.file + ": " + e.what() + "; run it as one process (without mpirun)");
-    }
     onRoot(comm, [&] { writer_ = std::make_unique<FrameWriter>(scene_, layout_, dir_, statsSoFar_); });
     if (start_ == 0) {
         const FrameStats st = sim_->measure();
@@ -136,7 +130,7 @@ void SceneRun::guarded(const std::string& what, F&& f) {
                          what.c_str(), sim_ ? sim_->particleCount() : std::size_t(0));
             comm.abort(1);
         }
-        const SceneBudget b = estimateBudget(scene_, false);
+        const SceneBudget b = estimateBudget(scene_, false, Comm::world().size());
         std::ostringstream msg;
         msg.precision(3);
         msg << "out of memory while " << what << " with " << (sim_ ? sim_->particleCount() : 0) << " particles (the scene needs about "
@@ -165,9 +159,20 @@ void SceneRun::removeOldOutputs() {
     if (removed) events_.note("removed " + std::to_string(removed) + " frame and checkpoint files of an earlier run of this scene");
 }
 
+void SceneRun::spread() {
+    try {
+        sim_->distribute(Comm::world());
+    } catch (const std::invalid_argument& e) {
+        throw SceneError(scene_.file + ": " + e.what() + "; run it as one process (without mpirun)");
+    }
+}
+
 void SceneRun::chooseStart() {
+    // On several ranks the leaves are cut before the first emission (each rank keeps its share of the sets
+    // as they are emitted) or after a checkpoint is read (every rank reads it whole and keeps its share).
     if (!options_.resume && !options_.framesGiven) {
         onRoot(Comm::world(), [&] { removeOldOutputs(); });
+        spread();
         sim_->emitDue();
         return;
     }
@@ -199,6 +204,7 @@ void SceneRun::chooseStart() {
         } catch (const std::invalid_argument& e) {
             throw SceneError(scene_.file + ": " + path + " cannot continue this scene: " + e.what());
         }
+        spread();
         statsSoFar_ = c.info.statsCsv;
         start_ = c.info.frame;
         events_.note("continuing from " + path + " (frame " + std::to_string(start_) + (c.info.midFrame ? ", inside frame " +
@@ -209,6 +215,7 @@ void SceneRun::chooseStart() {
         throw SceneError(dir_ + ": no usable checkpoint of scene " + scene_.name +
                          (options_.framesGiven ? " before frame " + std::to_string(options_.firstFrame) : std::string()) +
                          " to resume from; run without --resume to start from frame 0");
+    spread();
     sim_->emitDue();  // --frames without a checkpoint: simulate from frame 0, write only the frames asked for
 }
 

@@ -60,6 +60,8 @@ private:
     template <class F>
     void guarded(const std::string& what, F&& f);
     void chooseStart();
+    /// Spreads the simulation over the ranks (Simulation::distribute); what runs on one rank only is a SceneError.
+    void spread();
     void saveCheckpoint();
     /// Rank 0's part of saveCheckpoint: the file, and the older ones removed.
     void writeCheckpointFiles(const SimState& state);

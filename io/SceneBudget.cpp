@@ -66,7 +66,7 @@ long long emissionsWithin(const ParticleSetDesc& d, int frames) {
 
 }  // namespace
 
-SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly) {
+SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks) {
     SceneBudget b;
     const SimulationSettings& st = scene.settings;
     const double dx = st.dx, cell = dx * dx * dx;
@@ -100,8 +100,11 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly) {
         const double total = double(s.particles) * double(s.emissions);
         b.peakParticles += total;
         const double gridPerParticle = kNodesPerCellOfParticles * kBytesPerNode / d.particlesPerCell;
-        b.memoryBytes += total * (perParticle + kEngineBytesPerParticle + gridPerParticle + kOutputBytesPerParticle) +
-                         double(s.particles) * sizeof(Vec3d);  // the emitter keeps its sampled positions
+        const double simulated = perParticle + kEngineBytesPerParticle + gridPerParticle;
+        // On ranks, rank 0 simulates its share and gathers every particle to write them.
+        const double perRank = ranks > 1 ? simulated / ranks + perParticle : simulated;
+        b.memoryBytes += total * (perRank + kOutputBytesPerParticle) +
+                         double(s.particles) * sizeof(Vec3d);  // the emitter keeps its sampled positions, on every rank
         if (largestCoordinate / dx >= kMaxGridCoordinate) {
             std::ostringstream p;
             p << where << "/shape: lies " << largestCoordinate << " m from the origin, beyond the grid's coordinate range of "
@@ -112,7 +115,8 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly) {
     }
     b.machineBytes = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE));
     if (b.memoryBytes > b.machineBytes)
-        b.problems.push_back("/sets: the run needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) +
+        b.problems.push_back("/sets: " + std::string(ranks > 1 ? "rank 0 of " + std::to_string(ranks) + " (its share, and every particle gathered to write a frame)" : "the run") +
+                             " needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) +
                              " particles, and this machine has " + gib(b.machineBytes) +
                              "; use fewer particles (particles_per_cell, count, duration) or a larger dx");
     // The first step: the target, or the CFL bound at rest (the same rule as the engine's).
