@@ -11,10 +11,15 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 build=${2:-build-fuzz}
 release=${3:-build}
-for lib in mpm_scene mpm_engine mpm_grid; do
+for lib in mpm_scene mpm_engine mpm_grid mpm_comm; do
   [ -f "$release/lib$lib.a" ] || { echo "fuzz: $release/lib$lib.a is missing: build the project in $release first" >&2; exit 2; }
 done
-libs=("$release/libmpm_scene.a" "$release/libmpm_engine.a" "$release/libmpm_grid.a" -lassimp -lopenvdb -lImath-3_1 -ltbb -lpthread)
+libs=("$release/libmpm_scene.a" "$release/libmpm_engine.a" "$release/libmpm_grid.a" "$release/libmpm_comm.a" -lassimp -lopenvdb -lImath-3_1 -ltbb -lpthread)
+# The engine's ranks (core/Comm.cpp) link MPI when the Release build found it.
+if nm -u "$release/libmpm_comm.a" 2>/dev/null | grep -q MPI_Init_thread && command -v mpicxx >/dev/null; then
+  read -r -a mpi <<<"$(mpicxx --showme:link)"
+  libs+=("${mpi[@]}")
+fi
 mkdir -p "$build/corpus"
 CXX=${CXX_FUZZ:-clang++-14}
 flags=(-std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -I. -isystem /usr/include/eigen3)
