@@ -6,6 +6,9 @@
 #include <cstring>
 
 #ifdef MPM_HAVE_MPI
+// The C interface only: MPI's deprecated C++ bindings would pull their own library in.
+#define OMPI_SKIP_MPICXX 1
+#define MPICH_SKIP_MPICXX 1
 #include <mpi.h>
 #endif
 

@@ -16,7 +16,7 @@ for lib in mpm_scene mpm_engine mpm_grid mpm_comm; do
 done
 libs=("$release/libmpm_scene.a" "$release/libmpm_engine.a" "$release/libmpm_grid.a" "$release/libmpm_comm.a" -lassimp -lopenvdb -lImath-3_1 -ltbb -lpthread)
 # The engine's ranks (core/Comm.cpp) link MPI when the Release build found it.
-if nm -u "$release/libmpm_comm.a" 2>/dev/null | grep -q MPI_Init_thread && command -v mpicxx >/dev/null; then
+if nm -u "$release/libmpm_comm.a" 2>/dev/null | grep MPI_Init_thread >/dev/null && command -v mpicxx >/dev/null; then
   read -r -a mpi <<<"$(mpicxx --showme:link)"
   libs+=("${mpi[@]}")
 fi
