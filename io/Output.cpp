@@ -37,17 +37,30 @@ std::vector<SurfaceGroup> surfaceGroups(const std::string& grouping, const Speci
 }
 }  // namespace
 
-FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar)
+FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, int part)
     : name_(scene.name),
       output_(scene.output),
       layout_(layout),
       surfaces_(surfaceGroups(scene.output.surfaceGroup, layout)),
       attributes_(PointAttributes::of(scene.output.attributes)),
-      dir_(directory) {
+      dir_(directory),
+      part_(part) {
+    configure(scene);
+}
+
+FrameWriter FrameWriter::partWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, int part) {
+    return FrameWriter(scene, layout, directory, part);
+}
+
+void FrameWriter::configure(const SceneDesc& scene) {
     for (const ParticleSetDesc& d : scene.sets) attributes_.setColours.push_back(d.colour);
     // The surface resolves the particle spacing of the first set; the sphere radius is a multiple of it.
     const double particlesPerCell = scene.sets.empty() ? 8.0 : scene.sets.front().particlesPerCell;
     particleSpacing_ = scene.settings.dx / std::cbrt(particlesPerCell);
+}
+
+FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar)
+    : FrameWriter(scene, layout, directory, -1) {
     std::error_code ec;
     std::filesystem::create_directories(dir_, ec);
     if (ec) throw WriteError(dir_, "cannot create the output directory: " + ec.message());
@@ -63,8 +76,9 @@ FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, co
 }
 
 std::string FrameWriter::framePath(int frame, const char* suffix, const char* ext) const {
-    char buf[32];
-    std::snprintf(buf, sizeof(buf), "%04d", frame);
+    char buf[48];
+    if (part_ >= 0) std::snprintf(buf, sizeof(buf), "%04d_rank%03d", frame, part_);
+    else std::snprintf(buf, sizeof(buf), "%04d", frame);
     return dir_ + "/" + name_ + "_" + suffix + buf + ext;
 }
 
@@ -100,7 +114,7 @@ void FrameWriter::writeFrame(int frame, const std::vector<AnySpecies>& species, 
     if (o.points || o.surface || o.density || o.velocity) writeVdbFrame(r, cloud);
     if (o.ply) writePly(framePath(frame, "", ".ply"), cloud);
     lastWrite_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    recordStats(stats);
+    if (part_ < 0) recordStats(stats);
 }
 
 }  // namespace mpm

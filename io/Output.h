@@ -18,8 +18,11 @@ public:
     /// the directory, made if need be. Removes nothing: clearing an earlier run is the caller's decision (io/Run.h).
     /// Keeps its own copy of what it needs of the scene.
     FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar = "");
+    /// A writer of rank `part`'s part files (output.rank_files = "per_rank"): frames only, no stats.csv or
+    /// scene.json (rank 0's ordinary writer keeps those).
+    static FrameWriter partWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, int part);
 
-    /// Writes frame files for the current state and appends the stats row.
+    /// Writes frame files for the current state and appends the stats row (a part writer: the files only).
     void writeFrame(int frame, const Simulation& sim, const FrameStats& stats);
     /// The same for particles given apart (a run on several ranks gathers them first); dx is the grid's.
     void writeFrame(int frame, const std::vector<AnySpecies>& species, double dx, const FrameStats& stats);
@@ -42,6 +45,9 @@ private:
     std::string dir_;
     std::string csv_;
     double lastWrite_ = 0;
+    int part_ = -1;  ///< the rank whose part files this writes; -1: whole frames
+    FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, int part);
+    void configure(const SceneDesc& scene);
 };
 
 }  // namespace mpm

@@ -26,15 +26,17 @@ std::string regexEscape(const std::string& s) { return std::regex_replace(s, std
 
 /// Exactly this scene's frame files: <scene>_NNNN.vdb|ply and <scene>_points_NNNN.vdb, nothing of a scene
 /// whose name merely starts with this one's (a scene "dam" does not own "dam_break_0004.vdb").
-std::regex framesOf(const std::string& scene) { return std::regex("^" + regexEscape(scene) + R"(_(points_)?[0-9]{4,}\.(vdb|ply)$)"); }
+std::regex framesOf(const std::string& scene) {
+    return std::regex("^" + regexEscape(scene) + R"(_(points_)?[0-9]{4,}(_rank[0-9]{3,})?\.(vdb|ply)$)");
+}
 std::regex checkpointsOf(const std::string& scene) { return std::regex("^" + regexEscape(scene) + R"(_checkpoint_[0-9]{4,}\.mpmc$)"); }
 /// The temporary files this program writes, of any scene (one run per directory: none is in use now).
-const std::regex kTemporary(R"(^(.+_(points_|checkpoint_)?[0-9]{4,}\.(vdb|ply|mpmc)|stats\.csv|scene\.json)\.tmp[0-9]+$)");
+const std::regex kTemporary(R"(^(.+_(points_|checkpoint_)?[0-9]{4,}(_rank[0-9]{3,})?\.(vdb|ply|mpmc)|stats\.csv|scene\.json)\.tmp[0-9]+$)");
 
-/// Runs fn on rank 0 alone (the output directory is its to write) and has every rank throw what it threw,
+/// Runs fn on the ranks where `here` is true and has every rank throw what the first of them to fail threw,
 /// as the same kind of error, so that all of them stop together and one of them reports it.
 template <class F>
-void onRoot(const Comm& comm, F&& fn) {
+void agreeOnFailure(const Comm& comm, bool here, F&& fn) {
     if (!comm.distributed()) {
         fn();
         return;
@@ -43,7 +45,7 @@ void onRoot(const Comm& comm, F&& fn) {
     int32_t kind = kNone;
     std::string what, path;
     std::exception_ptr error;
-    if (comm.rank() == 0) try {
+    if (here) try {
             fn();
         } catch (const SceneError& e) {
             kind = kScene, what = e.what(), error = std::current_exception();
@@ -56,28 +58,35 @@ void onRoot(const Comm& comm, F&& fn) {
         } catch (const std::exception& e) {
             kind = kOther, what = e.what(), error = std::current_exception();
         }
+    const int reporter = comm.firstRank(kind != kNone);
+    if (reporter >= comm.size()) return;
     Bytes b;
-    if (comm.rank() == 0) {
+    if (comm.rank() == reporter) {
         put(b, kind);
         put(b, uint64_t(path.size()));
         putArray(b, path.data(), path.size());
         putArray(b, what.data(), what.size());
     }
-    b = comm.broadcast(b, 0);
+    b = comm.broadcast(b, reporter);
     ByteReader r{b};
     kind = r.get<int32_t>();
     path.resize(r.get<uint64_t>());
     r.getArray(path.data(), path.size());
     what.assign(reinterpret_cast<const char*>(b.data()) + r.at, b.size() - r.at);
-    if (error) std::rethrow_exception(error);
+    if (error && comm.rank() == reporter) std::rethrow_exception(error);
     switch (kind) {
-    case kNone: return;
     case kScene: throw SceneError(what);
     case kLock: throw LockError(what);
     case kWrite: throw WriteError(path, what.size() > path.size() + 2 ? what.substr(path.size() + 2) : what);
     case kLimit: throw LimitExceeded(what);
     default: throw std::runtime_error(what);
     }
+}
+
+/// Rank 0 alone: the output directory is its to write.
+template <class F>
+void onRoot(const Comm& comm, F&& fn) {
+    agreeOnFailure(comm, comm.rank() == 0, fn);
 }
 
 }  // namespace
@@ -105,16 +114,29 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     hash_ = sceneHash(identity_);
     chooseStart();
     onRoot(comm, [&] { writer_ = std::make_unique<FrameWriter>(scene_, layout_, dir_, statsSoFar_); });
-    if (start_ == 0) {
-        const FrameStats st = sim_->measure();
-        const bool write = options_.firstFrame == 0 && scene_.output.initialFrame;
-        const std::vector<AnySpecies> all = write && comm.distributed() ? sim_->gatherSpecies() : std::vector<AnySpecies>{};
-        onRoot(comm, [&] {
-            if (!write) writer_->recordStats(st);
-            else if (comm.distributed()) writer_->writeFrame(0, all, sim_->settings().dx, st);
-            else writer_->writeFrame(0, *sim_, st);
-        });
+    if (comm.distributed() && scene_.output.rankFiles == "per_rank")
+        partWriter_ = std::make_unique<FrameWriter>(FrameWriter::partWriter(scene_, layout_, dir_, comm.rank()));
+    if (start_ == 0) writeFrame(0, sim_->measure(), options_.firstFrame == 0 && scene_.output.initialFrame);
+}
+
+void SceneRun::writeFrame(int frame, const FrameStats& st, bool write) {
+    const Comm& comm = Comm::world();
+    if (!comm.distributed()) {
+        if (write) writer_->writeFrame(frame, *sim_, st);
+        else writer_->recordStats(st);
+        return;
     }
+    if (partWriter_) {
+        // Every rank its own part files; a write that fails on one stops all of them.
+        if (write) agreeOnFailure(comm, true, [&] { partWriter_->writeFrame(frame, sim_->species(), sim_->settings().dx, st); });
+        onRoot(comm, [&] { writer_->recordStats(st); });
+        return;
+    }
+    const std::vector<AnySpecies> all = write ? sim_->gatherSpecies() : std::vector<AnySpecies>{};
+    onRoot(comm, [&] {
+        if (write) writer_->writeFrame(frame, all, sim_->settings().dx, st);
+        else writer_->recordStats(st);
+    });
 }
 
 SceneRun::~SceneRun() = default;
@@ -274,20 +296,12 @@ void SceneRun::run(const std::atomic<int>* stop) {
             saveCheckpoint();
             throw;
         }
-        guarded("writing frame " + std::to_string(f), [&] {
-            const Comm& comm = Comm::world();
-            const bool write = f >= options_.firstFrame;
-            const std::vector<AnySpecies> all = write && comm.distributed() ? sim_->gatherSpecies() : std::vector<AnySpecies>{};
-            onRoot(comm, [&] {
-                if (!write) writer_->recordStats(st);
-                else if (comm.distributed()) writer_->writeFrame(f, all, sim_->settings().dx, st);
-                else writer_->writeFrame(f, *sim_, st);
-            });
-        });
+        guarded("writing frame " + std::to_string(f), [&] { writeFrame(f, st, f >= options_.firstFrame); });
         // On a stop request a checkpoint is written even when the scene asks for none.
         const bool saved = every > 0 && (f % every == 0 || f == last_);
         if (saved) guarded("writing the checkpoint of frame " + std::to_string(f), [&] { saveCheckpoint(); });
-        events_.frameDone(f, last_, st, f >= options_.firstFrame && writer_ ? writer_->lastWriteSeconds() : 0.0);
+        const FrameWriter* wrote = partWriter_ ? partWriter_.get() : writer_.get();
+        events_.frameDone(f, last_, st, f >= options_.firstFrame && wrote ? wrote->lastWriteSeconds() : 0.0);
         // A stop asked for while the frame was written: the state is at a frame boundary (every rank agrees).
         const bool stopAsked = stop && stop->load();
         if (Comm::world().max(stopAsked ? 1.0f : 0.0f) > 0.0f && f < last_) {

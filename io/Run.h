@@ -62,6 +62,8 @@ private:
     void chooseStart();
     /// Spreads the simulation over the ranks (Simulation::distribute); what runs on one rank only is a SceneError.
     void spread();
+    /// Frame `frame`'s files (when `write`; else its stats row only): gathered, per rank, or one process's.
+    void writeFrame(int frame, const FrameStats& stats, bool write);
     void saveCheckpoint();
     /// Rank 0's part of saveCheckpoint: the file, and the older ones removed.
     void writeCheckpointFiles(const SimState& state);
@@ -77,7 +79,8 @@ private:
     std::unique_ptr<DirectoryLock> lock_;
     std::unique_ptr<Simulation> sim_;
     SpeciesLayout layout_;
-    std::unique_ptr<FrameWriter> writer_;
+    std::unique_ptr<FrameWriter> writer_;      ///< rank 0's (every process's, alone): frames and stats.csv
+    std::unique_ptr<FrameWriter> partWriter_;  ///< each rank's part files (output.rank_files = "per_rank")
     std::string identity_, hash_, statsSoFar_, lastCheckpoint_;
     int start_ = 0, last_ = 0;
 };

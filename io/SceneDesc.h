@@ -83,6 +83,9 @@ struct OutputDesc {
     std::vector<std::string> attributes;  ///< extra point attributes (io/PointCloud.h PointAttributes::names)
     int checkpointEvery = 1;           ///< frames between checkpoints; 0 = none
     int checkpointsKept = 2;
+    /// On several ranks: "gathered" (rank 0 writes each frame as one process does) or "per_rank" (each rank
+    /// writes its own particles into part files <scene>_NNNN_rankRRR.vdb, nothing gathered).
+    std::string rankFiles = "gathered";
 };
 
 struct SceneDesc {

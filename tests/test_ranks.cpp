@@ -3,11 +3,13 @@
 // reported once and every rank exits 1; a checkpoint written by 2 ranks resumes on 3.
 #include <gtest/gtest.h>
 
+#include <map>
 #include <regex>
 #include <string>
 #include <vector>
 
 #include "ProgramRuns.h"
+#include "io/VdbWriter.h"
 
 using namespace mpm::test;
 
@@ -152,5 +154,42 @@ TEST(Ranks, WhatRunsOnOneRankOnlyIsRefusedWithExitTwo) {
         EXPECT_EQ(r.code, 2) << r.output;
         EXPECT_EQ(count(r.output, "runs on one rank only"), 1) << r.output;
         EXPECT_NE(r.output.find(dir + "/one_rank.json"), std::string::npos) << r.output;
+    }
+}
+
+TEST(Ranks, PerRankPartFilesHoldEveryParticleOnceWithTheBitsOfTheWholeFrame) {
+    REQUIRE_MPI();
+    const std::string dir = tempDir("ranks_parts");
+    const std::string scene = writeFile(dir + "/parts.json", R"({
+      "simulation": { "frames": 3, "substeps": 8, "dx": 0.02 },
+      "output": { "split_files": true, "rank_files": "per_rank", "checkpoint_every": 0 },
+      "sets": [ { "name": "water", "material": "water", "velocity": [1.5, 0, 0],
+                  "shape": { "type": "box", "min": [-0.4, 0.02, -0.1], "max": [-0.1, 0.2, 0.1] } },
+                { "name": "jelly", "material": "jelly", "velocity": [-1, 0, 0.2],
+                  "shape": { "type": "sphere", "center": [0.2, 0.15, 0], "radius": 0.1 } } ],
+      "colliders": [ { "type": "plane", "boundary": "separate", "friction": 0.4 } ] })");
+    // One process writes whole frames (rank_files speaks of ranks only); three ranks write a part each.
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/one", "--quiet"}, dir).code, 0);
+    const Result r = runRanks(3, {"run", scene, "-o", dir + "/three", "--quiet", "--threads", "1"}, dir);
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_EQ(statsWithoutWallTime(dir + "/one/stats.csv"), statsWithoutWallTime(dir + "/three/stats.csv"));
+    for (int f = 1; f <= 3; ++f) {
+        char name[64];
+        std::snprintf(name, sizeof name, "/parts_points_%04d.vdb", f);
+        const mpm::PointsReadBack whole = mpm::readVdbPoints(dir + "/one" + name);
+        // Every part's particles, by id: each exactly once, at the bits of the whole frame.
+        std::map<int32_t, std::pair<mpm::Vec3d, mpm::Vec3f>> byId;
+        for (int part = 0; part < 3; ++part) {
+            std::snprintf(name, sizeof name, "/parts_points_%04d_rank%03d.vdb", f, part);
+            const mpm::PointsReadBack p = mpm::readVdbPoints(dir + "/three" + name);
+            EXPECT_GT(p.id.size(), 0u) << name;
+            for (std::size_t i = 0; i < p.id.size(); ++i) EXPECT_TRUE(byId.emplace(p.id[i], std::pair{p.x[i], p.v[i]}).second) << p.id[i];
+        }
+        ASSERT_EQ(byId.size(), whole.id.size()) << "frame " << f;
+        for (std::size_t i = 0; i < whole.id.size(); ++i) {
+            const auto& [x, v] = byId.at(whole.id[i]);
+            EXPECT_EQ(x, whole.x[i]) << whole.id[i];
+            EXPECT_EQ(v, whole.v[i]) << whole.id[i];
+        }
     }
 }
