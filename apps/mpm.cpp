@@ -1,6 +1,8 @@
 // mpm: the command-line front end. `mpm run SCENE` simulates and writes frames; `mpm validate SCENE`
 // checks a scene and prints what it will cost. Exit codes: 0 success, 2 bad input, 1 failed run, 130 and
-// 143 stopped by SIGINT and SIGTERM (after writing a checkpoint to resume from).
+// 143 stopped by SIGINT and SIGTERM, 138 by SIGUSR1 (after writing a checkpoint to resume from). Under
+// mpirun, SIGUSR1 is the one to send: OpenMPI forwards it to every rank, while SIGINT and SIGTERM make it
+// kill the ranks after a second.
 #include <tbb/global_control.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
@@ -49,6 +51,7 @@ void installStopHandlers() {
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
+    sigaction(SIGUSR1, &sa, nullptr);
 }
 
 RunOptions parseFrames(const std::string& text, RunOptions o) {
@@ -129,7 +132,7 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
         const int sig = gStopSignal.load();
         if (speaks)
             std::fprintf(stderr, "%smpm: stopped by %s at frame %d (t = %g s); the state is in %s\nmpm: resume with: mpm run %s -o %s --resume\n",
-                         progress.tty ? "\n" : "", sig == SIGTERM ? "SIGTERM" : "SIGINT", job.simulation().frame(), job.simulation().time(),
+                         progress.tty ? "\n" : "", sig == SIGTERM ? "SIGTERM" : sig == SIGUSR1 ? "SIGUSR1" : "SIGINT", job.simulation().frame(), job.simulation().time(),
                          job.lastCheckpoint().c_str(), scenePath.c_str(), job.directory().c_str());
         return kExitSignalBase + (sig ? sig : SIGINT);
     }

@@ -1,11 +1,16 @@
 // The same run on many processes (docs/distributed.md): `mpirun -np N mpm run SCENE` on loopback must write
 // the bits one process writes, for any rank and thread count; rebalancing must not change them; a blow-up is
-// reported once and every rank exits 1; a checkpoint written by 2 ranks resumes on 3.
+// reported once and every rank exits 1; a checkpoint written by 2 ranks resumes on 3; SIGUSR1 stops every rank
+// at one substep; per-rank part files hold every particle once.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+
+#include <chrono>
 #include <map>
 #include <regex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "ProgramRuns.h"
@@ -192,4 +197,27 @@ TEST(Ranks, PerRankPartFilesHoldEveryParticleOnceWithTheBitsOfTheWholeFrame) {
             EXPECT_EQ(v, whole.v[i]) << whole.id[i];
         }
     }
+}
+
+TEST(Ranks, SigusrOneStopsEveryRankAtOneSubstepAndTheRunResumesOnThreeRanks) {
+    REQUIRE_MPI();
+    const std::string dir = tempDir("ranks_signal");
+    // The rank scene over 12 frames, so that the signal lands well before its end.
+    std::string text = readFile(kScene);
+    text.replace(text.find("\"frames\": 6"), 11, "\"frames\": 12");
+    const std::string scene = writeFile(dir + "/ranks_mix.json", text);
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/one", "--quiet"}, dir).code, 0);
+    // OpenMPI forwards SIGUSR1 to every rank (SIGINT and SIGTERM make mpirun kill them within a second).
+    const std::string out = dir + "/stopped";
+    std::vector<std::string> args{"--allow-run-as-root", "--oversubscribe", "--bind-to", "none", "-np", "2", MPM_BINARY,
+                                  "run", scene, "-o", out, "--threads", "1"};
+    Child c = start(args, dir + "/mpirun.log", kMpiexec);
+    while (!fs::exists(out + "/ranks_mix_checkpoint_0003.mpmc")) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    ::kill(c.pid, SIGUSR1);
+    EXPECT_EQ(c.wait(), 128 + SIGUSR1) << c.output();
+    EXPECT_EQ(count(c.output(), "mpm: stopped by SIGUSR1"), 1) << c.output();
+    const Result resumed = runRanks(3, {"run", scene, "-o", out, "--resume", "--threads", "1"}, dir);
+    ASSERT_EQ(resumed.code, 0) << resumed.output;
+    EXPECT_NE(resumed.output.find("continuing from"), std::string::npos) << resumed.output;
+    expectSameOutput(dir + "/one", out, "ranks_mix", 36);
 }
