@@ -171,20 +171,25 @@ std::vector<Bytes> Comm::exchange(const std::vector<Bytes>& out) const {
     MPI_Alltoall(sendSize.data(), 1, MPI_UNSIGNED_LONG_LONG, recvSize.data(), 1, MPI_UNSIGNED_LONG_LONG, MPI_COMM_WORLD);
     std::vector<Bytes> in(size_);
     std::vector<MPI_Request> requests;
+    // Pieces of at most kPiece bytes (an MPI count is an int); messages of one sender and tag arrive in order.
+    constexpr unsigned long long kPiece = 1ull << 30;
     for (int r = 0; r < size_; ++r) {
         if (r == rank_) {
             in[r] = out[r];
             continue;
         }
-        if (recvSize[r] == 0) continue;
         in[r].resize(recvSize[r]);
-        requests.emplace_back();
-        MPI_Irecv(in[r].data(), int(recvSize[r]), MPI_BYTE, r, 3, MPI_COMM_WORLD, &requests.back());
+        for (unsigned long long at = 0; at < recvSize[r]; at += kPiece) {
+            requests.emplace_back();
+            MPI_Irecv(in[r].data() + at, int(std::min(kPiece, recvSize[r] - at)), MPI_BYTE, r, 3, MPI_COMM_WORLD, &requests.back());
+        }
     }
     for (int r = 0; r < size_; ++r) {
-        if (r == rank_ || sendSize[r] == 0) continue;
-        requests.emplace_back();
-        MPI_Isend(out[r].data(), int(sendSize[r]), MPI_BYTE, r, 3, MPI_COMM_WORLD, &requests.back());
+        if (r == rank_) continue;
+        for (unsigned long long at = 0; at < sendSize[r]; at += kPiece) {
+            requests.emplace_back();
+            MPI_Isend(out[r].data() + at, int(std::min(kPiece, sendSize[r] - at)), MPI_BYTE, r, 3, MPI_COMM_WORLD, &requests.back());
+        }
         bytesSent_ += sendSize[r];
     }
     MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
