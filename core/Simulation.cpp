@@ -136,6 +136,9 @@ void Simulation::restore(SimState state) {
     for (std::size_t s = 0; s < state.species.size(); ++s)
         if (state.species[s].index() != state_.species[s].index())
             throw std::invalid_argument("restore: species " + std::to_string(s) + " has another material");
+    for (const Emitter& e : emitters_)
+        if (e.released && state.emittedFrame < e.lastEmission())
+            throw std::logic_error("restore: an emitter whose samples were released would emit again; restore before emitting");
     state_ = std::move(state);
     for (std::size_t s = 0; s < state_.species.size(); ++s) populated_[s] = particlesOf(state_.species[s]).size() > 0;
     restDensityVersion_ = -1;
@@ -153,8 +156,18 @@ std::size_t Simulation::totalParticleCount() const { return std::size_t(comm_->s
 void Simulation::emitDue() {
     if (state_.emittedFrame == state_.frame) return;
     state_.emittedFrame = state_.frame;
-    for (const Emitter& e : emitters_)
-        if (e.emitsAt(state_.frame)) addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
+    for (Emitter& e : emitters_) {
+        if (!e.emitsAt(state_.frame)) continue;
+        addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
+        // Emitted for the last time: its samples (24 bytes a particle and more, on every rank) are not needed again.
+        if (state_.frame == e.lastEmission()) {
+            std::vector<Vec3d>().swap(e.positions);
+            std::vector<Vec3f>().swap(e.velocities);
+            std::vector<float>().swap(e.masses);
+            std::vector<float>().swap(e.volumes);
+            e.released = true;
+        }
+    }
 }
 
 double Simulation::cflTimeStep() const {

@@ -82,6 +82,12 @@ struct Emitter {
     bool emitsAt(int frame) const {
         return !continuous && frame >= startFrame && frame < startFrame + durationFrames && (frame - startFrame) % (pauseFrames + 1) == 0;
     }
+    /// The last frame it emits at (startFrame - 1 when it never does, a stream included).
+    int lastEmission() const {
+        if (continuous || durationFrames <= 0) return startFrame - 1;
+        return startFrame + (durationFrames - 1) / (pauseFrames + 1) * (pauseFrames + 1);
+    }
+    bool released = false;  ///< its particles' arrays were freed after its last emission
 };
 
 /// Wall seconds spent in each phase of the substeps since the last reset (bench/ reports their shares).
