@@ -235,6 +235,8 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt, co
         const uint32_t l = leaves[i];
         const Range& r = range[i];
         const LeafView& leaf = grid.leaf(l);
+        // Zeroed to +0, so no sum in the block or in a node is ever -0: the halo parts that hold only zeros (a
+        // crowded leaf keeps its whole block's) then leave every node's bits as they are, on one rank or many.
         f4 block[B::kNodes];
         if (B::whole(r))
             std::memset(static_cast<void*>(block), 0, sizeof(block));
@@ -253,9 +255,7 @@ void scatterAll(SparseGrid& grid, std::vector<AnySpecies>& species, float dt, co
         for (int a = own.lo[0]; a < own.hi[0]; ++a)
             for (int b = own.lo[1]; b < own.hi[1]; ++b)
                 for (int c = own.lo[2]; c < own.hi[2]; ++c) {
-                    // Added to +0, as the halos are: a sum that starts at +0 is never -0, so the halo parts that hold
-                    // only zeros (a crowded leaf sends its whole block) leave every node's bits as they are.
-                    const f4 v = splat(0.0f) + block[B::index(a, b, c)];
+                    const f4 v = block[B::index(a, b, c)];
                     const int o = leafOffset(a, b, c);
                     leaf.mass[o] = v[0];
                     leaf.momentum[3 * o + 0] = v[1];
