@@ -51,7 +51,8 @@ struct SimulationSettings {
     WallContact wallContact = WallContact::Surface;  ///< for `separate` colliders (sticky and slip hold from the stencil's reach)
 
     /// Ranks re-cut the leaves into equal shares of particles when the most loaded holds more than this much
-    /// above the mean (docs/distributed.md); results do not depend on it, only the time per substep does.
+    /// above the mean (simulation.rebalance_imbalance; docs/distributed.md has the measurement); results do
+    /// not depend on it, only the time per substep does.
     double rebalanceImbalance = 0.1;
 
     double targetDt() const { return 1.0 / (fps * substepsPerFrame); }

@@ -336,7 +336,8 @@ std::vector<std::pair<int, std::string>> listCheckpoints(const std::string& dir,
 std::string sceneIdentity(const std::string& resolvedJson) {
     json j = json::parse(resolvedJson);
     j.erase("output");
-    if (j.contains("simulation") && j["simulation"].is_object()) j["simulation"].erase("threads");
+    // Neither changes a result: how many threads, and when ranks re-cut their leaves.
+    if (j.contains("simulation") && j["simulation"].is_object()) j["simulation"].erase("threads"), j["simulation"].erase("rebalance_imbalance");
     return j.dump();
 }
 

@@ -53,6 +53,13 @@ void simulationKeys(V& v, SceneDesc& d) {
         s.transfer.force, std::span<const Named<ForceScheme>>(kForces));
     v.number(Key{.name = "cfl", .help = "C in dt <= C dx / (c + max speed), c the fastest wave speed", .lo = 1e-3, .hi = 10.0},
              s.cfl);
+    v.number(Key{.name = "rebalance_imbalance",
+                 .help = "on several ranks (mpirun): re-cut the leaves into equal shares when the most loaded rank holds this "
+                         "fraction more particles than the mean, beyond what the last cut left; results never depend on it, "
+                         "only the run time does (docs/distributed.md)",
+                 .lo = 0.0,
+                 .hi = 1e6},
+             s.rebalanceImbalance);
     v.choice(Key{.name = "contact",
                  .help = "bodies in contact: single_field (one velocity field, touching bodies move together there) or "
                          "multi_field (a field per body, which bounce and part; a body is a set, or the sets sharing a `body` name)",
