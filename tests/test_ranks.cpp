@@ -212,7 +212,10 @@ TEST(Ranks, SigusrOneStopsEveryRankAtOneSubstepAndTheRunResumesOnThreeRanks) {
     std::vector<std::string> args{"--allow-run-as-root", "--oversubscribe", "--bind-to", "none", "-np", "2", MPM_BINARY,
                                   "run", scene, "-o", out, "--threads", "1"};
     Child c = start(args, dir + "/mpirun.log", kMpiexec);
-    while (!fs::exists(out + "/ranks_mix_checkpoint_0003.mpmc")) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
+    while (!fs::exists(out + "/ranks_mix_checkpoint_0003.mpmc") && std::chrono::steady_clock::now() < deadline)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    ASSERT_TRUE(fs::exists(out + "/ranks_mix_checkpoint_0003.mpmc")) << "no checkpoint within 5 minutes";
     ::kill(c.pid, SIGUSR1);
     EXPECT_EQ(c.wait(), 128 + SIGUSR1) << c.output();
     EXPECT_EQ(count(c.output(), "mpm: stopped by SIGUSR1"), 1) << c.output();
