@@ -689,13 +689,14 @@ namespace {
 /// Beyond every leaf in Morton order (leaf coordinates stay within 2^27 of the origin).
 const Vec3i kPastLastLeaf(1 << 29, 1 << 29, 1 << 29);
 
-/// Keeps the particles (every array of the species) whose flag is set, in order.
-template <class S>
-void keepWhere(S& sp, const std::vector<uint8_t>& keep) {
+/// Keeps the particles (every array of the species) i for which keep(i), in order; keep must not read the
+/// species' arrays, which it compacts one after another.
+template <class S, class Keep>
+void keepWhere(S& sp, Keep&& keep) {
     sp.forEachArray([&](auto& arr) {
         std::size_t k = 0;
         for (std::size_t i = 0; i < arr.size(); ++i)
-            if (keep[i]) arr[k++] = arr[i];
+            if (keep(i)) arr[k++] = arr[i];
         arr.resize(k);
     });
 }
@@ -795,10 +796,11 @@ void Simulation::distribute(const Comm& comm) {
     for (AnySpecies& s : state_.species)
         std::visit(
             [&](auto& sp) {
-                std::vector<uint8_t> keep(sp.p.size());
-                for (std::size_t i = 0; i < keep.size(); ++i)
-                    keep[i] = ownerOf(leafOfNode(fields_[0].baseNode(sp.p.x[i]))) == comm.rank();
-                keepWhere(sp, keep);
+                // Owners first: keepWhere moves the positions before the other arrays.
+                std::vector<int>& owner = ownerScratch_;
+                owner.resize(sp.p.size());
+                for (std::size_t i = 0; i < owner.size(); ++i) owner[i] = ownerOf(leafOfNode(fields_[0].baseNode(sp.p.x[i])));
+                keepWhere(sp, [&](std::size_t i) { return owner[i] == comm.rank(); });
                 sp.forEachArray([](auto& arr) { arr.shrink_to_fit(); });  // the whole scene's memory goes back
                 sp.leafStart.clear();
             },
@@ -842,7 +844,9 @@ void Simulation::migrateParticles() {
     for (AnySpecies& s : state_.species)
         std::visit(
             [&](auto& sp) {
-                std::vector<int> owner(sp.p.size());
+                // The owner of each particle's leaf, in a buffer kept between substeps (no allocation per substep).
+                std::vector<int>& owner = ownerScratch_;
+                owner.resize(sp.p.size());
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, owner.size(), kPermuteGrain), [&](const auto& r) {
                     for (std::size_t i = r.begin(); i < r.end(); ++i) owner[i] = ownerOf(leafOfNode(fields_[0].baseNode(sp.p.x[i])));
                 });
@@ -856,10 +860,7 @@ void Simulation::migrateParticles() {
                     pack(sp, leaving[std::size_t(r)], out[std::size_t(r)]);
                     any = any || !leaving[std::size_t(r)].empty();
                 }
-                if (!any) return;
-                std::vector<uint8_t> keep(owner.size());
-                for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = owner[i] == me;
-                keepWhere(sp, keep);
+                if (any) keepWhere(sp, [&](std::size_t i) { return owner[i] == me; });
             },
             s);
     const std::vector<Bytes> in = comm_->exchange(out);

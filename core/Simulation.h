@@ -263,6 +263,7 @@ private:
     std::vector<std::vector<uint32_t>> ghostsFor_;   ///< per rank: owned leaves that rank holds as ghosts
     std::vector<std::vector<Vec3i>> ghostCoordsFor_;  ///< the same by leaf coordinate, as that rank sent them
     std::vector<std::vector<NodeBox>> ghostBoxFor_;   ///< per rank and ghost leaf: the nodes that rank's halo parts wrote
+    std::vector<int> ownerScratch_;  ///< migration: the owner of each particle's leaf
     int rebalances_ = 0;
     double cutImbalance_ = 0.0;  ///< how far above the mean the last cut left the most loaded rank
     int32_t restDensityVersion_ = -1;  ///< nextId when the rest density was measured (the same on every rank)
