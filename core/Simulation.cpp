@@ -126,7 +126,7 @@ void Simulation::appendParticles(int s, const std::vector<Vec3d>& x, const Vec3f
     comm_->min(state_.bounds.minStiffnessKey);
 }
 
-void Simulation::restore(SimState state) {
+void Simulation::restore(SimState state, bool share) {
     if (state.streamFlow.size() != emitters_.size() || state.streamLayers.size() != emitters_.size())
         throw std::invalid_argument("restore: the state has " + std::to_string(state.streamFlow.size()) + " emitters' progress, the simulation " +
                                     std::to_string(emitters_.size()) + " emitters");
@@ -142,7 +142,8 @@ void Simulation::restore(SimState state) {
     state_ = std::move(state);
     for (std::size_t s = 0; s < state_.species.size(); ++s) populated_[s] = particlesOf(state_.species[s]).size() > 0;
     restDensityVersion_ = -1;
-    partitioned_ = false;  // every rank holds the whole state again: distribute() cuts it anew
+    partitioned_ = false;  // every rank holds the whole state (or its share) again: distribute() cuts it anew
+    holdsShare_ = share;
 }
 
 std::size_t Simulation::particleCount() const {
@@ -732,11 +733,23 @@ int Simulation::ownerOf(const Vec3i& leafCoord) const {
     return int(std::upper_bound(splitters_.begin(), splitters_.end(), leafCoord, mortonLess) - splitters_.begin());
 }
 
-std::vector<std::pair<Vec3i, long long>> Simulation::particlesPerLeaf() const {
+namespace {
+/// Leaf counts sorted in Morton order with each leaf's entries added up (a leaf may come several times).
+std::vector<std::pair<Vec3i, long long>> mergeCounts(std::vector<std::pair<Vec3i, long long>> all) {
+    std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return mortonLess(a.first, b.first); });
+    std::vector<std::pair<Vec3i, long long>> merged;
+    for (const auto& e : all) {
+        if (!merged.empty() && merged.back().first == e.first) merged.back().second += e.second;
+        else merged.push_back(e);
+    }
+    return merged;
+}
+/// How many of the positions fall in each leaf, in Morton order.
+template <class Leaf>
+std::vector<std::pair<Vec3i, long long>> countPerLeaf(const std::vector<Vec3d>& x, Leaf&& leafOf) {
     std::vector<Vec3i> leaves;
-    leaves.reserve(particleCount());
-    for (const AnySpecies& s : state_.species)
-        for (const Vec3d& x : particlesOf(s).x) leaves.push_back(leafOfNode(fields_[0].baseNode(x)));
+    leaves.reserve(x.size());
+    for (const Vec3d& p : x) leaves.push_back(leafOf(p));
     tbb::parallel_sort(leaves.begin(), leaves.end(), mortonLess);
     std::vector<std::pair<Vec3i, long long>> counts;
     for (const Vec3i& c : leaves) {
@@ -744,6 +757,36 @@ std::vector<std::pair<Vec3i, long long>> Simulation::particlesPerLeaf() const {
         ++counts.back().second;
     }
     return counts;
+}
+}  // namespace
+
+std::vector<std::pair<Vec3i, long long>> Simulation::particlesPerLeaf() const {
+    const auto leafOf = [&](const Vec3d& x) { return leafOfNode(fields_[0].baseNode(x)); };
+    std::vector<std::pair<Vec3i, long long>> all;
+    for (const AnySpecies& s : state_.species) {
+        const auto c = countPerLeaf(particlesOf(s).x, leafOf);
+        all.insert(all.end(), c.begin(), c.end());
+    }
+    return state_.species.size() == 1 ? all : mergeCounts(std::move(all));
+}
+
+std::vector<std::pair<Vec3i, long long>> Simulation::allParticlesPerLeaf() const {
+    // A leaf's particles can sit on several ranks (until they migrate, or as checkpoint parts left them).
+    Bytes b;
+    for (const auto& [c, n] : particlesPerLeaf()) {
+        for (int a = 0; a < 3; ++a) put(b, int32_t(c[a]));
+        put(b, n);
+    }
+    std::vector<std::pair<Vec3i, long long>> all;
+    for (const Bytes& part : comm_->allGather(b)) {
+        ByteReader r{part};
+        while (!r.done()) {
+            Vec3i c;
+            for (int a = 0; a < 3; ++a) c[a] = r.get<int32_t>();
+            all.emplace_back(c, r.get<long long>());
+        }
+    }
+    return mergeCounts(std::move(all));
 }
 
 void Simulation::cutLeaves(const std::vector<std::pair<Vec3i, long long>>& leafCounts) {
@@ -773,26 +816,28 @@ void Simulation::distribute(const Comm& comm) {
         throw std::invalid_argument("simulation.contact = \"multi_field\" runs on one rank only for now");
     if (settings_.wallGhosts == WallGhosts::Mirror)
         throw std::invalid_argument("simulation.wall_ghosts = \"mirror\" runs on one rank only for now");
-    // Every rank holds every particle here, and the same emitters, so each computes the same cut from its own
-    // counts: those of the particles, and of the sets about to be emitted at this frame. Called before the
-    // first emission, no rank ever holds the whole scene's particles, only its share.
-    std::vector<std::pair<Vec3i, long long>> counts = particlesPerLeaf();
+    // Every rank holds every particle here (or its share: then the counts are every rank's, merged), and the
+    // same emitters, so each computes the same cut: from the particles, and from the sets about to be emitted
+    // at this frame. Called before the first emission, no rank ever holds the whole scene's particles.
+    std::vector<std::pair<Vec3i, long long>> counts = holdsShare_ ? allParticlesPerLeaf() : particlesPerLeaf();
     if (state_.emittedFrame != state_.frame) {
-        std::vector<Vec3i> due;
+        const auto leafOf = [&](const Vec3d& x) { return leafOfNode(fields_[0].baseNode(x)); };
         for (const Emitter& e : emitters_)
-            if (e.emitsAt(state_.frame))
-                for (const Vec3d& x : e.positions) due.push_back(leafOfNode(fields_[0].baseNode(x)));
-        for (const auto& [c, n] : counts)
-            for (long long k = 0; k < n; ++k) due.push_back(c);
-        tbb::parallel_sort(due.begin(), due.end(), mortonLess);
-        counts.clear();
-        for (const Vec3i& c : due) {
-            if (counts.empty() || counts.back().first != c) counts.emplace_back(c, 0);
-            ++counts.back().second;
-        }
+            if (e.emitsAt(state_.frame)) {
+                const auto c = countPerLeaf(e.positions, leafOf);
+                counts.insert(counts.end(), c.begin(), c.end());
+            }
+        counts = mergeCounts(std::move(counts));
     }
     cutLeaves(counts);
     partitioned_ = true;
+    if (holdsShare_) {
+        // Each rank read some parts: the particles go to their leaves' owners, and every rank learns which
+        // species have particles somewhere.
+        migrateParticles();
+        for (std::size_t s = 0; s < populated_.size(); ++s) populated_[s] = comm.sum((long long)populated_[s]) > 0;
+        holdsShare_ = false;
+    }
     for (AnySpecies& s : state_.species)
         std::visit(
             [&](auto& sp) {
@@ -813,28 +858,7 @@ void Simulation::rebalanceIfNeeded() {
     const double most = comm_->max(double(mine));
     const double mean = double(total) / double(comm_->size());
     if (total == 0 || most <= mean * (1.0 + cutImbalance_ + settings_.rebalanceImbalance)) return;
-    // Every rank's particles per leaf, merged (a leaf's particles can sit on two ranks until they migrate).
-    Bytes b;
-    for (const auto& [c, n] : particlesPerLeaf()) {
-        for (int a = 0; a < 3; ++a) put(b, int32_t(c[a]));
-        put(b, n);
-    }
-    std::vector<std::pair<Vec3i, long long>> all;
-    for (const Bytes& part : comm_->allGather(b)) {
-        ByteReader r{part};
-        while (!r.done()) {
-            Vec3i c;
-            for (int a = 0; a < 3; ++a) c[a] = r.get<int32_t>();
-            all.emplace_back(c, r.get<long long>());
-        }
-    }
-    std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return mortonLess(a.first, b.first); });
-    std::vector<std::pair<Vec3i, long long>> merged;
-    for (const auto& e : all) {
-        if (!merged.empty() && merged.back().first == e.first) merged.back().second += e.second;
-        else merged.push_back(e);
-    }
-    cutLeaves(merged);
+    cutLeaves(allParticlesPerLeaf());
     ++rebalances_;
 }
 

@@ -160,8 +160,10 @@ public:
 
     /// Where the run is, whole (checkpoints write it; see core/SimState.h).
     const SimState& state() const { return state_; }
-    /// Continues from a state this simulation's model produced (same species, in the same order).
-    void restore(SimState state);
+    /// Continues from a state this simulation's model produced (same species, in the same order). `share`: on
+    /// one rank of several, the state holds only some of the run's particles (the parts of a checkpoint written
+    /// per rank that this rank read; the other ranks hold the rest), and distribute() cuts from every rank's.
+    void restore(SimState state, bool share = false);
 
     std::vector<AnySpecies>& species() { return state_.species; }
     const std::vector<AnySpecies>& species() const { return state_.species; }
@@ -181,9 +183,10 @@ public:
     std::size_t totalParticleCount() const;
 
     /// Spreads the run over the ranks of `comm` (docs/distributed.md). Every rank built the same model and
-    /// holds the same particles (a scene built, or a checkpoint restored, on each); each then keeps only the
-    /// particles of the leaves it owns. The leaves, in Morton order, are cut into ranges of equal particle
-    /// counts. With one rank this changes nothing.
+    /// holds the same particles (a scene built, or a checkpoint restored, on each), or a share of them (restore
+    /// with `share`); each then keeps only the particles of the leaves it owns, and receives those of its leaves
+    /// another rank held. The leaves, in Morton order, are cut into ranges of equal particle counts. With one
+    /// rank this changes nothing.
     void distribute(const Comm& comm);
     const Comm& comm() const { return *comm_; }
     /// Every particle of the run on rank 0, species by species in the order one process would hold them
@@ -207,6 +210,8 @@ private:
     // other ranks' stencils reach, and the ghost leaves' velocities after the grid update.
     void cutLeaves(const std::vector<std::pair<Vec3i, long long>>& leafCounts);
     std::vector<std::pair<Vec3i, long long>> particlesPerLeaf() const;
+    /// Every rank's particlesPerLeaf, merged (the same on every rank). Collective.
+    std::vector<std::pair<Vec3i, long long>> allParticlesPerLeaf() const;
     void rebalanceIfNeeded();
     void migrateParticles();
     void exchangeReachedLeaves(SparseGrid& grid);
@@ -258,6 +263,7 @@ private:
     const Comm* comm_;
     std::vector<Vec3i> splitters_;  ///< leaf coordinate where rank r + 1's range starts (Morton order)
     bool partitioned_ = false;
+    bool holdsShare_ = false;  ///< restored from checkpoint parts: distribute() merges every rank's counts
     std::vector<uint8_t> owned_;                     ///< per leaf of the grid: owned by this rank
     std::vector<std::vector<uint32_t>> ghostsFrom_;  ///< per rank: this rank's ghost leaves that rank owns
     std::vector<std::vector<uint32_t>> ghostsFor_;   ///< per rank: owned leaves that rank holds as ghosts

@@ -7,9 +7,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <iterator>
 #include <regex>
 #include <thread>
+#include <tuple>
 #include <type_traits>
 
 #include "io/AtomicFile.h"
@@ -168,6 +170,11 @@ json headerOf(const CheckpointInfo& info) {
     h["scene_hash"] = info.sceneHash;
     h["scene"] = info.sceneJson;
     h["stats_csv"] = info.statsCsv;
+    if (info.parts > 1 || !info.set.empty()) {
+        h["part"] = info.part;
+        h["parts"] = info.parts;
+        h["set"] = info.set;
+    }
     return h;
 }
 
@@ -183,6 +190,11 @@ CheckpointInfo infoOf(const json& h, const std::string& path) {
         info.sceneHash = h.at("scene_hash").get<std::string>();
         info.sceneJson = h.at("scene").get<std::string>();
         info.statsCsv = h.at("stats_csv").get<std::string>();
+        info.part = h.value("part", 0);
+        info.parts = h.value("parts", 1);
+        info.set = h.value("set", std::string());
+        if (info.parts < 1 || info.part < 0 || info.part >= info.parts) throw CheckpointError(path + ": header: part " +
+            std::to_string(info.part) + " of " + std::to_string(info.parts) + " parts");
         return info;
     } catch (const json::exception& e) {
         throw CheckpointError(path + ": header: " + e.what());
@@ -196,11 +208,32 @@ struct Verified {
     std::size_t payload = 0, payloadEnd = 0;
 };
 
-Verified verify(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw CheckpointError(path + ": cannot open: " + std::strerror(errno));
+/// The header at the start of a checkpoint's bytes (the first `n` of them, at least the whole header).
+/// Returns the header's info and where the payload starts.
+std::pair<CheckpointInfo, std::size_t> parseHeader(const char* b, std::size_t n, std::size_t limit, const std::string& path) {
+    if (n < sizeof(kMagic) + sizeof(uint32_t)) throw CheckpointError(path + ": truncated (" + std::to_string(n) + " bytes)");
+    if (std::memcmp(b, kMagic, sizeof(kMagic)) != 0) throw CheckpointError(path + ": not a checkpoint of this program");
+    uint32_t headerBytes;
+    std::memcpy(&headerBytes, b + sizeof(kMagic), sizeof(headerBytes));
+    const std::size_t headerAt = sizeof(kMagic) + sizeof(uint32_t);
+    if (headerBytes > kMaxHeaderBytes || headerAt + headerBytes > limit) throw CheckpointError(path + ": corrupt header length");
+    if (headerAt + headerBytes > n) throw CheckpointError(path + ": truncated header");
+    json h;
+    try {
+        h = json::parse(b + headerAt, b + headerAt + headerBytes);
+    } catch (const json::exception& e) {
+        throw CheckpointError(path + ": header is not valid JSON: " + e.what());
+    }
+    CheckpointInfo info = infoOf(h, path);
+    if (info.format != kCheckpointFormat)
+        throw CheckpointError(path + ": format " + std::to_string(info.format) + ", this program reads format " +
+                              std::to_string(kCheckpointFormat));
+    return {info, headerAt + headerBytes};
+}
+
+Verified verify(std::vector<char> bytes, const std::string& path) {
     Verified v;
-    v.bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    v.bytes = std::move(bytes);
     const std::vector<char>& b = v.bytes;
     const std::size_t minimum = sizeof(kMagic) + sizeof(uint32_t) + sizeof(uint64_t) + sizeof(kTrailerMagic);
     if (b.size() < minimum) throw CheckpointError(path + ": truncated (" + std::to_string(b.size()) + " bytes)");
@@ -213,29 +246,15 @@ Verified verify(const std::string& path) {
     Checksum sum;
     sum.add(b.data(), sumAt);
     if (sum.value() != stored) throw CheckpointError(path + ": checksum mismatch (the file is corrupt)");
-    uint32_t headerBytes;
-    std::memcpy(&headerBytes, b.data() + sizeof(kMagic), sizeof(headerBytes));
-    const std::size_t headerAt = sizeof(kMagic) + sizeof(uint32_t);
-    if (headerBytes > kMaxHeaderBytes || headerAt + headerBytes > sumAt) throw CheckpointError(path + ": corrupt header length");
-    json h;
-    try {
-        h = json::parse(b.begin() + std::ptrdiff_t(headerAt), b.begin() + std::ptrdiff_t(headerAt + headerBytes));
-    } catch (const json::exception& e) {
-        throw CheckpointError(path + ": header is not valid JSON: " + e.what());
-    }
-    v.info = infoOf(h, path);
-    if (v.info.format != kCheckpointFormat)
-        throw CheckpointError(path + ": format " + std::to_string(v.info.format) + ", this program reads format " +
-                              std::to_string(kCheckpointFormat));
-    v.payload = headerAt + headerBytes;
+    std::tie(v.info, v.payload) = parseHeader(b.data(), sumAt, sumAt, path);
     v.payloadEnd = sumAt;
     return v;
 }
 
 }  // namespace
 
-void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const SimState& state) {
-    writeAtomically(path, [&](std::ostream& os) {
+void encodeCheckpoint(std::ostream& os, const CheckpointInfo& info, const SimState& state) {
+    {
         Out out(os);
         out.bytes(kMagic, sizeof(kMagic));
         const std::string header = headerOf(info).dump();
@@ -265,13 +284,39 @@ void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const 
         const uint64_t sum = out.checksum();
         os.write(reinterpret_cast<const char*>(&sum), sizeof(sum));
         os.write(kTrailerMagic, sizeof(kTrailerMagic));
-    });
+    }
 }
 
-CheckpointInfo readCheckpointInfo(const std::string& path) { return verify(path).info; }
+void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const SimState& state) {
+    writeAtomically(path, [&](std::ostream& os) { encodeCheckpoint(os, info, state); });
+}
 
-Checkpoint readCheckpoint(const std::string& path) {
-    const Verified v = verify(path);
+CheckpointInfo readCheckpointInfo(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw CheckpointError(path + ": cannot open: " + std::strerror(errno));
+    std::error_code ec;
+    const std::size_t size = std::size_t(fs::file_size(path, ec));
+    if (ec) throw CheckpointError(path + ": cannot read its size: " + ec.message());
+    char start[sizeof(kMagic) + sizeof(uint32_t)] = {};
+    in.read(start, sizeof(start));
+    uint32_t headerBytes = 0;
+    if (in.gcount() == std::streamsize(sizeof(start))) std::memcpy(&headerBytes, start + sizeof(kMagic), sizeof(headerBytes));
+    std::vector<char> b(sizeof(start) + std::min<std::size_t>(headerBytes, std::min<std::size_t>(size, kMaxHeaderBytes)));
+    in.seekg(0);
+    in.read(b.data(), std::streamsize(b.size()));
+    return parseHeader(b.data(), std::size_t(in.gcount()), size, path).first;
+}
+
+static std::vector<char> fileBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw CheckpointError(path + ": cannot open: " + std::strerror(errno));
+    return std::vector<char>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+Checkpoint readCheckpoint(const std::string& path) { return decodeCheckpoint(fileBytes(path), path); }
+
+Checkpoint decodeCheckpoint(std::vector<char> bytes, const std::string& path) {
+    const Verified v = verify(std::move(bytes), path);
     In in(v.bytes.data() + v.payload, v.payloadEnd - v.payload, path);
     Checkpoint c;
     c.info = v.info;
@@ -316,21 +361,84 @@ std::string checkpointPath(const std::string& dir, const std::string& scene, int
     return dir + "/" + scene + "_checkpoint_" + buf + ".mpmc";
 }
 
-std::vector<std::pair<int, std::string>> listCheckpoints(const std::string& dir, const std::string& scene) {
-    std::vector<std::pair<int, std::string>> out;
+std::string checkpointPartPath(const std::string& dir, const std::string& scene, int frame, int part) {
+    char buf[48];
+    std::snprintf(buf, sizeof(buf), "%04d_rank%03d", frame, part);
+    return dir + "/" + scene + "_checkpoint_" + buf + ".mpmc";
+}
+
+std::vector<std::string> CheckpointFiles::all() const {
+    std::vector<std::string> out;
+    if (!whole.empty()) out.push_back(whole);
+    for (const auto& [k, p] : parts) out.push_back(p);
+    return out;
+}
+
+std::vector<CheckpointFiles> listCheckpoints(const std::string& dir, const std::string& scene) {
+    // Exactly this scene's: "<scene>_checkpoint_NNNN.mpmc" and its parts "..._NNNN_rankRRR.mpmc".
+    static const std::regex kName(R"(^([0-9]{4,})(_rank([0-9]{3,}))?\.mpmc$)");
+    std::map<int, CheckpointFiles, std::greater<int>> byFrame;
     std::error_code ec;
     const std::string prefix = scene + "_checkpoint_";
     for (const auto& e : fs::directory_iterator(dir, ec)) {
         const std::string name = e.path().filename().string();
-        if (name.size() <= prefix.size() + 5 || name.compare(0, prefix.size(), prefix) != 0) continue;
+        std::smatch m;
+        if (name.compare(0, prefix.size(), prefix) != 0) continue;
         const std::string rest = name.substr(prefix.size());
-        const std::size_t dot = rest.find('.');
-        if (dot == std::string::npos || dot < 4 || rest.substr(dot) != ".mpmc") continue;
-        if (!std::all_of(rest.begin(), rest.begin() + std::ptrdiff_t(dot), [](char c) { return c >= '0' && c <= '9'; })) continue;
-        out.emplace_back(std::stoi(rest.substr(0, dot)), e.path().string());
+        if (!std::regex_match(rest, m, kName) || m[1].length() > 9 || m[3].length() > 9) continue;
+        CheckpointFiles& f = byFrame[std::stoi(m[1].str())];
+        f.frame = std::stoi(m[1].str());
+        if (m[2].matched) f.parts.emplace_back(std::stoi(m[3].str()), e.path().string());
+        else f.whole = e.path().string();
     }
-    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::vector<CheckpointFiles> out;
+    for (auto& [frame, f] : byFrame) {
+        std::sort(f.parts.begin(), f.parts.end());
+        out.push_back(std::move(f));
+    }
     return out;
+}
+
+std::vector<std::string> completeSet(const CheckpointFiles& files) {
+    if (files.parts.empty()) throw CheckpointError("frame " + std::to_string(files.frame) + ": no checkpoint parts");
+    const std::string& first = files.parts.front().second;
+    if (files.parts.front().first != 0) throw CheckpointError(first + ": part 0 of its set is missing");
+    const CheckpointInfo zero = readCheckpointInfo(first);
+    if (zero.set.empty() || zero.part != 0) throw CheckpointError(first + ": not part 0 of a set of checkpoint parts");
+    std::vector<std::string> paths;
+    for (const auto& [k, path] : files.parts) {
+        if (k >= zero.parts) break;  // left by an earlier set of more parts
+        if (k != int(paths.size())) break;
+        const CheckpointInfo info = readCheckpointInfo(path);
+        if (info.set != zero.set || info.parts != zero.parts || info.part != k || info.frame != zero.frame)
+            throw CheckpointError(path + ": of another set of parts than " + first + " (an interrupted write)");
+        paths.push_back(path);
+    }
+    if (int(paths.size()) != zero.parts)
+        throw CheckpointError(first + ": " + std::to_string(paths.size()) + " of its set's " + std::to_string(zero.parts) +
+                              " parts are present (part " + std::to_string(paths.size()) + " is missing)");
+    return paths;
+}
+
+void appendSpecies(SimState& a, SimState&& b) {
+    if (a.species.size() != b.species.size()) throw CheckpointError("checkpoint parts hold different species");
+    for (std::size_t s = 0; s < a.species.size(); ++s) {
+        if (a.species[s].index() != b.species[s].index()) throw CheckpointError("checkpoint parts hold different materials");
+        std::visit(
+            [&](auto& to) {
+                auto& from = std::get<std::decay_t<decltype(to)>>(b.species[s]);
+                // Both are the same species type: their arrays come in the same order and types.
+                std::vector<void*> src;
+                from.forEachArray([&](auto& arr) { src.push_back(&arr); });
+                std::size_t k = 0;
+                to.forEachArray([&](auto& dst) {
+                    auto& arr = *static_cast<std::decay_t<decltype(dst)>*>(src[k++]);
+                    dst.insert(dst.end(), arr.begin(), arr.end());
+                    std::decay_t<decltype(dst)>().swap(arr);  // b's memory goes back as it is taken
+                });
+            },
+            a.species[s]);
+    }
 }
 
 std::string sceneIdentity(const std::string& resolvedJson) {

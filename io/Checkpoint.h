@@ -7,7 +7,15 @@
 // Layout: "MPMCKPT1", u32 header length, the header (JSON text), the payload (the state's scalars, then per
 // species its material, name, parameters and every per-particle array, each array as Blosc chunks), then a
 // trailer: u64 checksum of everything before it and "MPMCEND1".
+//
+// On several ranks with output.rank_files = "per_rank" a checkpoint is a set of parts, one a rank
+// ("<scene>_checkpoint_NNNN_rankRRR.mpmc"), each a file of the layout above holding the run's scalars and that
+// rank's particles, its header naming the part, the number of parts and the set (a random id shared by the
+// parts written together). A set is usable only whole: every part present, of the same set, each verified.
+// Nothing passes through one rank, so a run beyond one machine's memory can checkpoint; any rank count
+// reads it (docs/distributed.md).
 #include <cstdint>
+#include <iosfwd>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -31,7 +39,10 @@ struct CheckpointInfo {
     bool midFrame = false;   ///< written on an interruption inside frame + 1
     std::string sceneHash;   ///< of the scene's identity (sceneIdentity)
     std::string sceneJson;   ///< that identity, to name what changed
-    std::string statsCsv;    ///< stats.csv as it was when the checkpoint was written
+    std::string statsCsv;    ///< stats.csv as it was when the checkpoint was written (a set: in part 0 alone)
+    int part = 0;            ///< of a set of parts: which one (rank order)
+    int parts = 1;           ///< 1: a whole checkpoint
+    std::string set;         ///< the set's id (empty for a whole checkpoint)
 };
 
 struct Checkpoint {
@@ -46,13 +57,34 @@ inline constexpr int kCheckpointFormat = 2;  ///< 2: continuous emitters' progre
 void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const SimState& state);
 /// Reads and verifies a whole checkpoint. Throws CheckpointError naming the file and what is wrong.
 Checkpoint readCheckpoint(const std::string& path);
-/// Reads and verifies only the header (cheap): for listing.
+/// The same in memory: a checkpoint's bytes, and the name its errors give (parts' ranks pass the run's
+/// scalars to ranks that read no part this way, as a checkpoint without particles).
+void encodeCheckpoint(std::ostream& os, const CheckpointInfo& info, const SimState& state);
+Checkpoint decodeCheckpoint(std::vector<char> bytes, const std::string& name);
+/// Reads only the header (cheap: the payload and its checksum are not read, readCheckpoint verifies them).
 CheckpointInfo readCheckpointInfo(const std::string& path);
 
 /// "<dir>/<scene>_checkpoint_NNNN.mpmc".
 std::string checkpointPath(const std::string& dir, const std::string& scene, int frame);
-/// The checkpoints of exactly this scene in dir, as (frame, path), newest first.
-std::vector<std::pair<int, std::string>> listCheckpoints(const std::string& dir, const std::string& scene);
+/// Part `part` of a set: "<dir>/<scene>_checkpoint_NNNN_rankRRR.mpmc".
+std::string checkpointPartPath(const std::string& dir, const std::string& scene, int frame, int part);
+
+/// The files of one frame's checkpoint: a whole one, or the part files found (by part number; not yet checked
+/// to be one complete set).
+struct CheckpointFiles {
+    int frame = 0;
+    std::string whole;                            ///< empty when the frame has none
+    std::vector<std::pair<int, std::string>> parts;  ///< (part, path), by part
+    /// Every file, whole and parts.
+    std::vector<std::string> all() const;
+};
+/// The checkpoints of exactly this scene in dir, frame by frame, newest first.
+std::vector<CheckpointFiles> listCheckpoints(const std::string& dir, const std::string& scene);
+/// The paths of a complete set among `files.parts` (part 0 .. N-1 of one set, N from their headers), or a
+/// CheckpointError saying what is missing or mixed. Reads headers only.
+std::vector<std::string> completeSet(const CheckpointFiles& files);
+/// Appends b's particles to a's, species by species (a and b of one run: same species in the same order).
+void appendSpecies(SimState& a, SimState&& b);
 
 /// The part of a resolved scene that decides the results: everything but `output` and `simulation/threads`,
 /// as canonical JSON text; and its hash.

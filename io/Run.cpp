@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <cstring>
 #include <limits>
+#include <random>
 #include <regex>
 #include <sstream>
 
@@ -29,7 +31,9 @@ std::string regexEscape(const std::string& s) { return std::regex_replace(s, std
 std::regex framesOf(const std::string& scene) {
     return std::regex("^" + regexEscape(scene) + R"(_(points_)?[0-9]{4,}(_rank[0-9]{3,})?\.(vdb|ply)$)");
 }
-std::regex checkpointsOf(const std::string& scene) { return std::regex("^" + regexEscape(scene) + R"(_checkpoint_[0-9]{4,}\.mpmc$)"); }
+std::regex checkpointsOf(const std::string& scene) {
+    return std::regex("^" + regexEscape(scene) + R"(_checkpoint_[0-9]{4,}(_rank[0-9]{3,})?\.mpmc$)");
+}
 /// The temporary files this program writes, of any scene (one run per directory: none is in use now).
 const std::regex kTemporary(R"(^(.+_(points_|checkpoint_)?[0-9]{4,}(_rank[0-9]{3,})?\.(vdb|ply|mpmc)|stats\.csv|scene\.json)\.tmp[0-9]+$)");
 
@@ -81,6 +85,16 @@ void agreeOnFailure(const Comm& comm, bool here, F&& fn) {
     case kLimit: throw LimitExceeded(what);
     default: throw std::runtime_error(what);
     }
+}
+
+/// What the lowest rank whose `error` is not empty says (empty when no rank's is): every rank gets it.
+std::string firstError(const Comm& comm, const std::string& error) {
+    const int reporter = comm.firstRank(!error.empty());
+    if (reporter >= comm.size()) return std::string();
+    Bytes b;
+    if (comm.rank() == reporter) putArray(b, error.data(), error.size());
+    b = comm.broadcast(b, reporter);
+    return std::string(reinterpret_cast<const char*>(b.data()), b.size());
 }
 
 /// Rank 0 alone: the output directory is its to write.
@@ -191,7 +205,8 @@ void SceneRun::spread() {
 
 void SceneRun::chooseStart() {
     // On several ranks the leaves are cut before the first emission (each rank keeps its share of the sets
-    // as they are emitted) or after a checkpoint is read (every rank reads it whole and keeps its share).
+    // as they are emitted) or after a checkpoint is read (every rank reads a whole one and keeps its share, or
+    // reads some of a set's parts and sends on what other ranks own).
     if (!options_.resume && !options_.framesGiven) {
         onRoot(Comm::world(), [&] { removeOldOutputs(); });
         spread();
@@ -200,15 +215,12 @@ void SceneRun::chooseStart() {
     }
     // The newest checkpoint that can produce the first frame asked for, valid and of this scene.
     const int newest = options_.framesGiven ? options_.firstFrame - 1 : std::numeric_limits<int>::max();
-    for (const auto& [frame, path] : listCheckpoints(dir_, scene_.name)) {
-        if (frame > newest) continue;
+    for (const CheckpointFiles& files : listCheckpoints(dir_, scene_.name)) {
+        if (files.frame > newest) continue;
         Checkpoint c;
-        try {
-            c = readCheckpoint(path);
-        } catch (const CheckpointError& e) {
-            events_.warning(std::string(e.what()) + "; trying the one before");
-            continue;
-        }
+        bool share = false;
+        std::string path;
+        if (!readCheckpointOf(files, c, share, path)) continue;
         if (c.info.sceneHash != hash_) {
             std::string changes;
             for (const std::string& d : sceneDifferences(c.info.sceneJson, identity_)) changes += (changes.empty() ? "" : "; ") + d;
@@ -222,7 +234,7 @@ void SceneRun::chooseStart() {
             events_.warning("resuming from " + path + " although the scene changed (" + changes + ")");
         }
         try {
-            sim_->restore(std::move(c.state));
+            sim_->restore(std::move(c.state), share);
         } catch (const std::invalid_argument& e) {
             throw SceneError(scene_.file + ": " + path + " cannot continue this scene: " + e.what());
         }
@@ -241,16 +253,126 @@ void SceneRun::chooseStart() {
     sim_->emitDue();  // --frames without a checkpoint: simulate from frame 0, write only the frames asked for
 }
 
-void SceneRun::saveCheckpoint() {
-    // What one process would write: on several ranks the particles are gathered to rank 0 first.
+bool SceneRun::readCheckpointOf(const CheckpointFiles& files, Checkpoint& c, bool& share, std::string& path) {
     const Comm& comm = Comm::world();
+    std::string error;
+    if (!files.whole.empty()) {
+        // A whole checkpoint: every rank reads it and keeps its share (distribute).
+        path = files.whole;
+        try {
+            c = readCheckpoint(path);
+        } catch (const CheckpointError& e) {
+            error = e.what();
+        }
+        error = firstError(comm, error);
+        if (error.empty()) return true;
+        events_.warning(error + (files.parts.empty() ? "; trying the one before" : "; trying its parts"));
+        if (files.parts.empty()) return false;
+        error.clear();
+    }
+    // Parts of a set: rank r of M reads parts k with k M / N = r (all of them alone, none when M > N), then
+    // the particles go to their owners (distribute); a rank without a part takes the scalars from rank 0.
+    std::vector<std::string> paths;
+    try {
+        paths = completeSet(files);
+    } catch (const CheckpointError& e) {
+        error = e.what();
+    }
+    error = firstError(comm, error);
+    if (!error.empty()) {
+        events_.warning(error + "; trying the one before");
+        return false;
+    }
+    path = paths.front().substr(0, paths.front().size() - std::string("_rank000.mpmc").size()) + "_rank*.mpmc";
+    const long long N = (long long)paths.size(), M = comm.size();
+    bool first = true;
+    try {
+        for (long long k = 0; k < N; ++k) {
+            if (k * M / N != comm.rank()) continue;
+            Checkpoint part = readCheckpoint(paths[std::size_t(k)]);
+            if (first) c = std::move(part), first = false;
+            else appendSpecies(c.state, std::move(part.state));
+        }
+    } catch (const CheckpointError& e) {
+        error = e.what();
+    }
+    error = firstError(comm, error);
+    if (!error.empty()) {
+        events_.warning(error + "; trying the one before");
+        return false;
+    }
+    if (comm.distributed()) {
+        // Ranks that read no part (more ranks than parts) need the run's scalars and species, without particles.
+        Bytes skeleton;
+        if (comm.rank() == 0) {
+            std::vector<AnySpecies> particles = std::move(c.state.species);
+            SimState empty = c.state;  // the scalars, then the species without their particles
+            c.state.species = std::move(particles);
+            for (const AnySpecies& s : c.state.species)
+                std::visit([&](const auto& sp) { empty.species.emplace_back(std::decay_t<decltype(sp)>{sp.name, sp.params, {}, {}, {}}); }, s);
+            std::ostringstream os;
+            encodeCheckpoint(os, c.info, empty);
+            const std::string bytes = os.str();
+            putArray(skeleton, bytes.data(), bytes.size());
+        }
+        skeleton = comm.broadcast(skeleton, 0);
+        if (first) c = decodeCheckpoint(std::vector<char>(reinterpret_cast<const char*>(skeleton.data()),
+                                                          reinterpret_cast<const char*>(skeleton.data()) + skeleton.size()), path);
+        share = true;
+    }
+    return true;
+}
+
+void SceneRun::saveCheckpoint() {
+    const Comm& comm = Comm::world();
+    if (comm.distributed() && scene_.output.rankFiles == "per_rank") {
+        saveCheckpointParts();
+        return;
+    }
+    // What one process would write: on several ranks the particles are gathered to rank 0 first.
     const SimState gathered = comm.distributed() ? sim_->gatherState() : SimState{};
     const SimState& s = comm.distributed() ? gathered : sim_->state();
     lastCheckpoint_ = checkpointPath(dir_, scene_.name, s.frame);
     onRoot(comm, [&] { writeCheckpointFiles(s); });
 }
 
-void SceneRun::writeCheckpointFiles(const SimState& s) {
+void SceneRun::saveCheckpointParts() {
+    // Every rank writes its part; the set's id tells the parts written together from those of an earlier set.
+    const Comm& comm = Comm::world();
+    Bytes id;
+    if (comm.rank() == 0) {
+        std::random_device entropy;
+        char buf[24];
+        std::snprintf(buf, sizeof buf, "%08x%08x", entropy(), entropy());
+        putArray(id, buf, std::strlen(buf));
+    }
+    id = comm.broadcast(id, 0);
+    const SimState& s = sim_->state();
+    CheckpointInfo info = checkpointInfo(s, comm.rank() == 0);
+    info.part = comm.rank();
+    info.parts = comm.size();
+    info.set.assign(reinterpret_cast<const char*>(id.data()), id.size());
+    lastCheckpoint_ = checkpointPartPath(dir_, scene_.name, s.frame, 0);
+    lastCheckpoint_ = lastCheckpoint_.substr(0, lastCheckpoint_.size() - std::string("000.mpmc").size()) + "*.mpmc";
+    agreeOnFailure(comm, true, [&] { writeCheckpoint(checkpointPartPath(dir_, scene_.name, s.frame, comm.rank()), info, s); });
+    // The set is whole: what else this frame had (a whole checkpoint, parts of a larger set) and the older
+    // sets beyond those kept go.
+    onRoot(comm, [&] {
+        std::error_code ec;
+        const auto all = listCheckpoints(dir_, scene_.name);
+        for (std::size_t i = 0; i < all.size(); ++i) {
+            if (all[i].frame == s.frame) {
+                if (!all[i].whole.empty()) fs::remove(all[i].whole, ec);
+                for (const auto& [k, p] : all[i].parts)
+                    if (k >= comm.size()) fs::remove(p, ec);
+            } else if (i >= std::size_t(scene_.output.checkpointsKept)) {
+                for (const std::string& p : all[i].all()) fs::remove(p, ec);
+            }
+        }
+    });
+}
+
+CheckpointInfo SceneRun::checkpointInfo(const SimState& s, bool withStats) const {
     CheckpointInfo info;
     info.format = kCheckpointFormat;
     info.program = std::string("sparse-mpm ") + MPM_VERSION;
@@ -260,13 +382,22 @@ void SceneRun::writeCheckpointFiles(const SimState& s) {
     info.midFrame = s.frameSubsteps > 0;
     info.sceneHash = hash_;
     info.sceneJson = identity_;
-    info.statsCsv = writer_->statsCsv();
+    if (withStats) info.statsCsv = writer_->statsCsv();
+    return info;
+}
+
+void SceneRun::writeCheckpointFiles(const SimState& s) {
     const std::string path = checkpointPath(dir_, scene_.name, s.frame);
-    writeCheckpoint(path, info, s);
-    // Keep the newest ones.
+    writeCheckpoint(path, checkpointInfo(s, true), s);
+    // Keep the newest ones; parts of this frame (an earlier per-rank set) go.
     const auto all = listCheckpoints(dir_, scene_.name);
     std::error_code ec;
-    for (std::size_t i = std::size_t(scene_.output.checkpointsKept); i < all.size(); ++i) fs::remove(all[i].second, ec);
+    for (std::size_t i = 0; i < all.size(); ++i) {
+        if (all[i].frame == s.frame)
+            for (const auto& [k, p] : all[i].parts) fs::remove(p, ec);
+        if (i >= std::size_t(scene_.output.checkpointsKept))
+            for (const std::string& p : all[i].all()) fs::remove(p, ec);
+    }
 }
 
 void SceneRun::reportRanks() {

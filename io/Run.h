@@ -11,6 +11,7 @@
 #include <memory>
 #include <string>
 
+#include "io/Checkpoint.h"
 #include "io/DirectoryLock.h"
 #include "io/Output.h"
 #include "io/SceneBuilder.h"
@@ -64,9 +65,15 @@ private:
     void spread();
     /// Frame `frame`'s files (when `write`; else its stats row only): gathered, per rank, or one process's.
     void writeFrame(int frame, const FrameStats& stats, bool write);
+    /// Reads frame `files.frame`'s checkpoint (whole, or this rank's parts of a set: then `share`), or warns
+    /// why it cannot be used and returns false (every rank alike). `path` names it in notes.
+    bool readCheckpointOf(const CheckpointFiles& files, Checkpoint& c, bool& share, std::string& path);
     void saveCheckpoint();
     /// Rank 0's part of saveCheckpoint: the file, and the older ones removed.
     void writeCheckpointFiles(const SimState& state);
+    /// output.rank_files = "per_rank" on several ranks: each rank writes its part of the set, nothing gathered.
+    void saveCheckpointParts();
+    CheckpointInfo checkpointInfo(const SimState& state, bool withStats) const;
     void removeStaleTemporaries();
     void removeOldOutputs();
     /// On several ranks: how the particles ended up spread, the re-cuts and the traffic (a note).

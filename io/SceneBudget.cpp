@@ -101,9 +101,9 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         b.peakParticles += total;
         const double gridPerParticle = kNodesPerCellOfParticles * kBytesPerNode / d.particlesPerCell;
         const double simulated = perParticle + kEngineBytesPerParticle + gridPerParticle;
-        // On ranks, rank 0 simulates its share and gathers every particle to write a frame or a checkpoint
-        // (unless frames go to per-rank part files and no checkpoint is written).
-        const bool gathers = scene.output.rankFiles == "gathered" || scene.output.checkpointEvery > 0;
+        // On ranks, rank 0 simulates its share and gathers every particle to write a frame or a checkpoint,
+        // unless frames and checkpoints go to per-rank part files.
+        const bool gathers = scene.output.rankFiles == "gathered";
         const double perRank = ranks > 1 ? simulated / ranks + (gathers ? perParticle : 0.0) : simulated;
         const double output = ranks > 1 && scene.output.rankFiles == "per_rank" ? kOutputBytesPerParticle / ranks : kOutputBytesPerParticle;
         b.memoryBytes += total * (perRank + output) +
@@ -118,7 +118,7 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
     }
     b.machineBytes = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE));
     if (b.memoryBytes > b.machineBytes)
-        b.problems.push_back("/sets: " + std::string(ranks > 1 ? "rank 0 of " + std::to_string(ranks) + " (its share, and every particle gathered to write a frame or checkpoint)" : "the run") +
+        b.problems.push_back("/sets: " + std::string(ranks > 1 ? "rank 0 of " + std::to_string(ranks) + " (its share" + std::string(scene.output.rankFiles == "gathered" ? ", and every particle gathered to write a frame or checkpoint)" : ")") : "the run") +
                              " needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) +
                              " particles, and this machine has " + gib(b.machineBytes) +
                              "; use fewer particles (particles_per_cell, count, duration) or a larger dx");

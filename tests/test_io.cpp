@@ -282,8 +282,8 @@ TEST(Output, RerunRemovesOldFramesOfTheSceneOnly) {
     const std::string dir = tempDir("rerun");
     const std::string scene = writeScene(dir, "rr.json", kValid);
     fs::create_directories(dir + "/f");
-    for (const char* name : {"rr_0007.vdb", "rr_points_0007.vdb", "rr_checkpoint_0007.mpmc", "other_0007.vdb", "rr_break_0007.vdb",
-                             "rr_0007.vdb.tmp12345"})
+    for (const char* name : {"rr_0007.vdb", "rr_points_0007.vdb", "rr_checkpoint_0007.mpmc", "rr_checkpoint_0007_rank001.mpmc", "other_0007.vdb",
+                             "rr_break_0007.vdb", "rr_break_checkpoint_0007_rank000.mpmc", "rr_0007.vdb.tmp12345"})
         std::ofstream(dir + "/f/" + name) << "stale";
     RunOptions options;
     options.outDir = dir + "/f";
@@ -294,9 +294,11 @@ TEST(Output, RerunRemovesOldFramesOfTheSceneOnly) {
     EXPECT_FALSE(fs::exists(dir + "/f/rr_0007.vdb"));
     EXPECT_FALSE(fs::exists(dir + "/f/rr_points_0007.vdb"));
     EXPECT_FALSE(fs::exists(dir + "/f/rr_checkpoint_0007.mpmc"));
+    EXPECT_FALSE(fs::exists(dir + "/f/rr_checkpoint_0007_rank001.mpmc"));  // a part of a per-rank set
     EXPECT_FALSE(fs::exists(dir + "/f/rr_0007.vdb.tmp12345"));  // a killed run's temporary file
     EXPECT_TRUE(fs::exists(dir + "/f/other_0007.vdb"));
     EXPECT_TRUE(fs::exists(dir + "/f/rr_break_0007.vdb"));      // a scene whose name starts with this one's
+    EXPECT_TRUE(fs::exists(dir + "/f/rr_break_checkpoint_0007_rank000.mpmc"));
     EXPECT_FALSE(fs::exists(dir + "/f/rr_0000.vdb"));            // the initial state is not a frame unless asked for
     EXPECT_EQ(notes, 2);                                         // both removals are reported
 }

@@ -1,7 +1,7 @@
 // The same run on many processes (docs/distributed.md): `mpirun -np N mpm run SCENE` on loopback must write
 // the bits one process writes, for any rank and thread count; rebalancing must not change them; a blow-up is
-// reported once and every rank exits 1; a checkpoint written by 2 ranks resumes on 3; SIGUSR1 stops every rank
-// at one substep; per-rank part files hold every particle once.
+// reported once and every rank exits 1; a checkpoint written by 2 ranks resumes on 3, whole or as per-rank parts;
+// SIGUSR1 stops every rank at one substep; per-rank part files hold every particle once.
 #include <gtest/gtest.h>
 
 #include <signal.h>
@@ -9,11 +9,13 @@
 #include <chrono>
 #include <map>
 #include <regex>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "ProgramRuns.h"
+#include "io/Checkpoint.h"
 #include "io/VdbWriter.h"
 
 using namespace mpm::test;
@@ -126,6 +128,64 @@ TEST(Ranks, ACheckpointOfTwoRanksResumesOnThreeWithTheBitsOfAnUninterruptedRun) 
     ASSERT_EQ(second.code, 0) << second.output;
     EXPECT_NE(second.output.find("continuing from"), std::string::npos) << second.output;
     expectSameOutput(dir + "/one", out, "ranks_mix", 18);
+}
+
+TEST(Ranks, CheckpointPartsOfTwoRanksResumeOnThreeAndOnOneWithTheBitsOfAnUninterruptedRun) {
+    REQUIRE_MPI();
+    const std::string dir = tempDir("ranks_checkpoint_parts");
+    ASSERT_EQ(runMpm({"run", kScene, "-o", dir + "/one", "--quiet"}, dir).code, 0);
+    // Frames 0-3 on two ranks writing per-rank files: the checkpoint of frame 3 is a set of two parts, nothing
+    // gathered. (The output section is not part of the scene's identity: the gathered scene resumes from it.)
+    std::string text = readFile(kScene);
+    text.replace(text.find("\"checkpoint_every\""), 0, "\"rank_files\": \"per_rank\", ");
+    fs::create_directories(dir + "/per_rank");
+    const std::string perRank = writeFile(dir + "/per_rank/ranks_mix.json", text);
+    const std::string out = dir + "/parts";
+    const Result first = runRanks(2, {"run", perRank, "-o", out, "--frames", "0:3", "--quiet", "--threads", "1"}, dir);
+    ASSERT_EQ(first.code, 0) << first.output;
+    const std::string part0 = "/ranks_mix_checkpoint_0003_rank000.mpmc", part1 = "/ranks_mix_checkpoint_0003_rank001.mpmc";
+    ASSERT_TRUE(fs::exists(out + part0) && fs::exists(out + part1));
+    EXPECT_FALSE(fs::exists(out + "/ranks_mix_checkpoint_0003.mpmc"));
+    EXPECT_FALSE(fs::exists(out + "/ranks_mix_checkpoint_0003_rank002.mpmc"));
+    // Each part holds its rank's particles only, and together they hold all of them once.
+    const mpm::Checkpoint a = mpm::readCheckpoint(out + part0), b = mpm::readCheckpoint(out + part1);
+    EXPECT_EQ(a.info.parts, 2);
+    EXPECT_EQ(b.info.part, 1);
+    EXPECT_EQ(a.info.set, b.info.set);
+    std::set<int32_t> ids;
+    std::size_t inParts = 0;
+    for (const mpm::Checkpoint* c : {&a, &b}) {
+        std::size_t here = 0;
+        for (const mpm::AnySpecies& s : c->state.species) {
+            for (int32_t id : mpm::particlesOf(s).id) ids.insert(id);
+            here += mpm::particlesOf(s).id.size();
+        }
+        EXPECT_GT(here, 0u);
+        inParts += here;
+    }
+    EXPECT_EQ(ids.size(), inParts);
+    EXPECT_EQ(int32_t(inParts), a.state.nextId);
+    // Resumed on three ranks (one reads no part) and on one process (reads both): frames 4-6 and the stats of
+    // the uninterrupted one-process run.
+    for (int ranks : {3, 1}) {
+        const std::string resumed = dir + "/on" + std::to_string(ranks);
+        fs::create_directories(resumed);
+        fs::copy_file(out + part0, resumed + part0);
+        fs::copy_file(out + part1, resumed + part1);
+        const std::vector<std::string> args{"run", kScene, "-o", resumed, "--resume", "--threads", "1"};
+        const Result r = ranks > 1 ? runRanks(ranks, args, dir) : runMpm(args, dir);
+        ASSERT_EQ(r.code, 0) << r.output;
+        EXPECT_NE(r.output.find("continuing from " + resumed + "/ranks_mix_checkpoint_0003_rank*.mpmc"), std::string::npos) << r.output;
+        expectSameOutput(resumed, dir + "/one", "ranks_mix", 9);
+    }
+    // A set missing a part is not used: named, and the run has nothing else to resume from.
+    const std::string broken = dir + "/broken";
+    fs::create_directories(broken);
+    fs::copy_file(out + part0, broken + part0);
+    const Result r = runRanks(2, {"run", kScene, "-o", broken, "--resume", "--threads", "1"}, dir);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_EQ(count(r.output, "1 of its set's 2 parts are present (part 1 is missing)"), 1) << r.output;
+    EXPECT_NE(r.output.find("no usable checkpoint"), std::string::npos) << r.output;
 }
 
 TEST(Ranks, RetriedFramesRestartOnEveryRankAlike) {
