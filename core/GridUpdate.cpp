@@ -50,14 +50,13 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
 }
 
 namespace {
-/// The velocity at a point from the nodes around it (trilinear, over the nodes with mass only); false where
-/// none of them has mass. A point on a node reads that node alone.
-bool velocityAt(const LeafLookup& lookup, const LeafView* near, const Vec3d& cells, Vec3f& v) {
+/// The nodes whose values the velocity at a point (in cells) is interpolated from, with their trilinear weights;
+/// a point on a node reads that node alone. Calls f(node, weight) for the corners of nonzero weight, in order.
+template <class F>
+void forEachCorner(const Vec3d& cells, F&& f) {
     constexpr double kOnNode = 1e-6;  // [cells]: an image this close to a node is that node (a wall on the grid)
     const Vec3d base = cells.array().floor();
     const Vec3d frac = cells - base;
-    float weightSum = 0.0f;
-    Vec3f sum = Vec3f::Zero();
     for (int corner = 0; corner < 8; ++corner) {
         float w = 1.0f;
         Vec3i node;
@@ -69,44 +68,99 @@ bool velocityAt(const LeafLookup& lookup, const LeafView* near, const Vec3d& cel
             w *= float(wa);
             node[a] = int(base[a]) + up;
         }
-        if (w == 0.0f) continue;
-        int offset = 0;
-        const LeafView* leaf = lookup.at(node, near, offset);
-        if (!leaf || leaf->mass[offset] == 0.0f) continue;
-        weightSum += w;
-        sum += w * Eigen::Map<const Vec3f>(leaf->momentum + 3 * offset);
+        if (w != 0.0f) f(node, w);
     }
+}
+
+/// The velocity at a point from the nodes around it (trilinear, over the nodes with mass only); false where
+/// none of them has mass. `read(node, mass, velocity)` gives a node's values (false: no leaf there).
+template <class Read>
+bool velocityAt(const Vec3d& cells, Read&& read, Vec3f& v) {
+    float weightSum = 0.0f;
+    Vec3f sum = Vec3f::Zero();
+    forEachCorner(cells, [&](const Vec3i& node, float w) {
+        float m = 0.0f;
+        Vec3f vn;
+        if (!read(node, m, vn) || m == 0.0f) return;
+        weightSum += w;
+        sum += w * vn;
+    });
     if (!(weightSum > 0.0f)) return false;
     v = sum / weightSum;
     return true;
 }
+
+bool lexicographic(const Vec3i& a, const Vec3i& b) { return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3); }
 }  // namespace
 
-std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd) {
+std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd,
+                             const RemoteNodes* remote) {
     bool any = false;
     for (const auto& c : colliders) any = any || c->boundary() != Boundary::Separate;
     if (!any) return 0;
     const LeafLookup lookup(grid);
-    // Read every image first, then write: an image may lie next to another ghost.
-    std::vector<std::vector<std::pair<int, Vec3f>>> values(grid.leafCount());
     const double invDx = 1.0 / grid.dx();
+    // The ghosts of every (owned) leaf first.
+    struct Ghost {
+        Collider::Ghost g;
+        Boundary boundary;
+    };
+    std::vector<std::vector<Ghost>> ghosts(grid.leafCount());
     forEachLeafRange(grid.leafCount(), LeafGrain::Nodes, [&](std::size_t begin, std::size_t end) {
         const auto contexts = contextsFor(colliders);
-        std::vector<Collider::Ghost> ghosts;
+        std::vector<Collider::Ghost> found;
         for (std::size_t l = begin; l < end; ++l) {
-            const LeafView& leaf = grid.leaf(l);
+            if (remote && !(*remote->owned)[l]) continue;
             for (std::size_t c = 0; c < colliders.size(); ++c) {
                 const Boundary b = colliders[c]->boundary();
                 if (b == Boundary::Separate) continue;
-                ghosts.clear();
-                colliders[c]->ghostsOfLeaf(leaf, grid.writtenBox(l), grid.dx(), tEnd, contexts[c].get(), ghosts);
-                for (const Collider::Ghost& g : ghosts) {
-                    Vec3f image;
-                    if (!velocityAt(lookup, &leaf, g.mirror * invDx, image)) continue;
-                    const Vec3f rel = image - g.velocity;
-                    const Vec3f ghost = b == Boundary::Sticky ? Vec3f(g.velocity - rel) : Vec3f(g.velocity + rel - 2.0f * rel.dot(g.normal) * g.normal);
-                    values[l].emplace_back(g.node, ghost);
+                found.clear();
+                colliders[c]->ghostsOfLeaf(grid.leaf(l), grid.writtenBox(l), grid.dx(), tEnd, contexts[c].get(), found);
+                for (const Collider::Ghost& g : found) ghosts[l].push_back({g, b});
+            }
+        }
+    });
+    // On ranks: the images' nodes other ranks own, from their owners (sorted, each once).
+    std::vector<Vec3i> far;
+    std::vector<float> farMass;
+    std::vector<Vec3f> farVelocity;
+    if (remote) {
+        for (const auto& leafGhosts : ghosts)
+            for (const Ghost& gh : leafGhosts)
+                forEachCorner(gh.g.mirror * invDx, [&](const Vec3i& node, float) {
+                    if (!remote->local(node)) far.push_back(node);
+                });
+        std::sort(far.begin(), far.end(), lexicographic);
+        far.erase(std::unique(far.begin(), far.end()), far.end());
+        remote->fetch(far, farMass, farVelocity);
+    }
+    // Read every image first, then write: an image may lie next to another ghost.
+    std::vector<std::vector<std::pair<int, Vec3f>>> values(grid.leafCount());
+    forEachLeafRange(grid.leafCount(), LeafGrain::Nodes, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t l = begin; l < end; ++l) {
+            const LeafView* near = &grid.leaf(l);
+            const auto read = [&](const Vec3i& node, float& m, Vec3f& v) {
+                if (remote && !remote->local(node)) {
+                    const std::size_t k = std::size_t(std::lower_bound(far.begin(), far.end(), node, lexicographic) - far.begin());
+                    m = farMass[k];
+                    v = farVelocity[k];
+                    return true;
                 }
+                int offset = 0;
+                const LeafView* leaf = lookup.at(node, near, offset);
+                if (!leaf) return false;
+                m = leaf->mass[offset];
+                v = Eigen::Map<const Vec3f>(leaf->momentum + 3 * offset);
+                return true;
+            };
+            for (const Ghost& gh : ghosts[l]) {
+                const Collider::Ghost& g = gh.g;
+                Vec3f image;
+                if (!velocityAt(g.mirror * invDx, read, image)) continue;
+                const Vec3f rel = image - g.velocity;
+                const Vec3f ghost =
+                    gh.boundary == Boundary::Sticky ? Vec3f(g.velocity - rel) : Vec3f(g.velocity + rel - 2.0f * rel.dot(g.normal) * g.normal);
+                values[l].emplace_back(g.node, ghost);
             }
         }
     });

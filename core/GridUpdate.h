@@ -2,6 +2,7 @@
 // The collider passes of a substep: the grid update (thesis 3.20, 3.26, section 5): v = (mv) / m plus dt g on
 // nodes with mass, then the colliders at the step's end time; and, after advection, the particle pass that
 // moves particles found inside a collider back to its surface (docs/method.md, section 7).
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -32,7 +33,18 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
 /// fraction of a cell beyond. Only nodes whose image holds material are mirrored (the others stay held), so a
 /// body arriving at a wall meets the held condition. The images are read before any ghost is written.
 /// Returns the number of nodes mirrored.
-std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd);
+///
+/// On ranks (`remote` given) only owned leaves' ghosts are mirrored, and an image's nodes in leaves other ranks
+/// own (whose values here are partial sums) are read from their owners through `remote.fetch`, called once on
+/// every rank (collective): the values read are those one process reads, so the bits are the same.
+struct RemoteNodes {
+    const std::vector<uint8_t>* owned = nullptr;             ///< per leaf of the grid: owned by this rank
+    std::function<bool(const Vec3i& node)> local;           ///< whether this rank owns the node's leaf
+    /// The owners' mass and velocity of each node, in order.
+    std::function<void(const std::vector<Vec3i>& nodes, std::vector<float>& mass, std::vector<Vec3f>& velocity)> fetch;
+};
+std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd,
+                             const RemoteNodes* remote = nullptr);
 
 struct ProjectionSummary {
     ExactSum work;          ///< work moving colliders did on the particles they moved

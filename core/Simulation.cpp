@@ -1,5 +1,7 @@
 #include "core/Simulation.h"
 
+#include "sparse/LeafLookup.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -403,7 +405,23 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     if (fields_.size() == 1) {
         const bool ranks = partitioned_ && comm_->distributed();
         GridUpdateResult r = updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface, true, ranks ? &owned_ : nullptr);
-        if (mirror) mirrorGhostNodes(fields_[0], colliders_, tEnd);
+        if (mirror && ranks) {
+            // Images in other ranks' leaves are read from their owners; the mirrored nodes then go to their
+            // holders with the other ghost velocities.
+            PhaseClock clock;
+            RemoteNodes remote;
+            remote.owned = &owned_;
+            remote.local = [&](const Vec3i& node) { return ownerOf(leafOfNode(node)) == comm_->rank(); };
+            remote.fetch = [&](const std::vector<Vec3i>& nodes, std::vector<float>& m, std::vector<Vec3f>& v) {
+                clock.lap(phases_.grid);
+                fetchNodes(fields_[0], nodes, m, v);
+                clock.lap(phases_.communication);
+            };
+            mirrorGhostNodes(fields_[0], colliders_, tEnd, &remote);
+            clock.lap(phases_.grid);
+        } else if (mirror) {
+            mirrorGhostNodes(fields_[0], colliders_, tEnd);
+        }
         if (ranks) {
             PhaseClock clock;
             r.maxSpeed = comm_->max(r.maxSpeed);
@@ -814,8 +832,6 @@ void Simulation::distribute(const Comm& comm) {
     if (!comm.distributed()) return;
     if (fields_.size() > 1 || settings_.contact == ContactModel::MultiField)
         throw std::invalid_argument("simulation.contact = \"multi_field\" runs on one rank only for now");
-    if (settings_.wallGhosts == WallGhosts::Mirror)
-        throw std::invalid_argument("simulation.wall_ghosts = \"mirror\" runs on one rank only for now");
     // Every rank holds every particle here (or its share: then the counts are every rank's, merged), and the
     // same emitters, so each computes the same cut: from the particles, and from the sets about to be emitted
     // at this frame. Called before the first emission, no rank ever holds the whole scene's particles.
@@ -952,6 +968,47 @@ void Simulation::sendGhostVelocities(SparseGrid& grid) {
             reader.getArray(box.hi, 3);
             box.forEach([&](int n) { reader.getArray(leaf.momentum + 3 * n, 3); });
             grid.writtenBox(l) = box;
+        }
+    }
+}
+
+void Simulation::fetchNodes(const SparseGrid& grid, const std::vector<Vec3i>& nodes, std::vector<float>& mass, std::vector<Vec3f>& velocity) {
+    // Requests to each node's owner, answered in the order asked (mass 0 where the owner has no leaf: no
+    // particle reaches there on any rank).
+    const int R = comm_->size(), me = comm_->rank();
+    std::vector<Bytes> ask(static_cast<std::size_t>(R));
+    std::vector<std::vector<std::size_t>> asked(static_cast<std::size_t>(R));
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+        const int owner = ownerOf(leafOfNode(nodes[i]));
+        putArray(ask[std::size_t(owner)], nodes[i].data(), 3);
+        asked[std::size_t(owner)].push_back(i);
+    }
+    const std::vector<Bytes> questions = comm_->exchange(ask);
+    const LeafLookup lookup(grid);
+    std::vector<Bytes> answers(static_cast<std::size_t>(R));
+    for (int r = 0; r < R; ++r) {
+        if (r == me) continue;
+        ByteReader q{questions[std::size_t(r)]};
+        while (!q.done()) {
+            Vec3i node;
+            q.getArray(node.data(), 3);
+            int offset = 0;
+            const LeafView* leaf = lookup.at(node, nullptr, offset);
+            const float m = leaf ? leaf->mass[offset] : 0.0f;
+            const Vec3f v = leaf ? Vec3f(Eigen::Map<const Vec3f>(leaf->momentum + 3 * offset)) : Vec3f(Vec3f::Zero());
+            put(answers[std::size_t(r)], m);
+            putArray(answers[std::size_t(r)], v.data(), 3);
+        }
+    }
+    const std::vector<Bytes> replies = comm_->exchange(answers);
+    mass.assign(nodes.size(), 0.0f);
+    velocity.assign(nodes.size(), Vec3f::Zero());
+    for (int r = 0; r < R; ++r) {
+        if (asked[std::size_t(r)].empty()) continue;
+        ByteReader a{replies[std::size_t(r)]};
+        for (std::size_t i : asked[std::size_t(r)]) {
+            mass[i] = a.get<float>();
+            a.getArray(velocity[i].data(), 3);
         }
     }
 }

@@ -216,6 +216,8 @@ private:
     void migrateParticles();
     void exchangeReachedLeaves(SparseGrid& grid);
     void sendGhostVelocities(SparseGrid& grid);
+    /// The mass and velocity of nodes other ranks own, from their owners (the mirror pass). Collective.
+    void fetchNodes(const SparseGrid& grid, const std::vector<Vec3i>& nodes, std::vector<float>& mass, std::vector<Vec3f>& velocity);
     /// Globalises a G2P summary: extremes over ranks, and the bad particle one process would report first.
     void reduceSummary(G2PSummary& g2p) const;
     StepBound lastBound_{0.0, "", ""};  ///< what set the latest substep's step (stats only, not state)
