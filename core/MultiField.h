@@ -12,6 +12,7 @@
 // difference of the node masses. Contact starts where the bodies first share nodes: a volume-fraction test
 // (Lemiale et al. 2010: contact only where the bodies' volumes fill the node's cell) was measured on the
 // two-sphere case and lost more energy (8.4% against 4.9% at R/dx = 8), the bodies overlapping before it acts.
+#include <functional>
 #include <vector>
 
 #include "sparse/SparseGrid.h"
@@ -26,6 +27,16 @@ struct FieldContactSummary {
 /// Applies the contact condition on every node that more than one field has mass at. The fields hold
 /// velocities (after gravity, before colliders). Each node is handled by one task, the one visiting the lowest field that has mass there, so the
 /// result does not depend on the thread count.
-FieldContactSummary resolveFieldContact(std::vector<SparseGrid>& fields, float friction);
+///
+/// On ranks (`remote` given) only owned leaves are handled (a leaf coordinate has one owner in every field), and
+/// the masses a normal reads in leaves other ranks own come from their owners through `remote.fetch`, called
+/// once per field on every rank (collective): the same masses one process reads, so the same bits.
+struct RemoteFields {
+    std::vector<const std::vector<uint8_t>*> owned;  ///< per field, per leaf: owned by this rank
+    std::function<bool(const Vec3i& node)> local;    ///< whether this rank owns the node's leaf
+    /// The owners' masses of field `field` at the nodes, in order.
+    std::function<void(std::size_t field, const std::vector<Vec3i>& nodes, std::vector<float>& mass)> fetch;
+};
+FieldContactSummary resolveFieldContact(std::vector<SparseGrid>& fields, float friction, const RemoteFields* remote = nullptr);
 
 }  // namespace mpm

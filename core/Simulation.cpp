@@ -328,6 +328,7 @@ void Simulation::bin() {
         migrateParticles();
         clock.lap(phases_.communication);
     }
+    rankLeaves_.resize(fields_.size());
     for (std::size_t f = 0; f < fields_.size(); ++f)
         withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
             const std::vector<int>& members = fieldSpecies_[f];
@@ -337,21 +338,22 @@ void Simulation::bin() {
                 std::visit([&](auto& sp) { requests[s] = BinRequest{&sp.p.x, &sp.p.id, &dest, &sp.leafStart}; }, species[s]);
             }
             grid.collectLeaves(requests);
-            if (ranks) exchangeReachedLeaves(grid);
+            RankLeaves& rl = rankLeaves_[f];
+            if (ranks) exchangeReachedLeaves(grid, rl);
             grid.allocateLeaves();
             if (ranks) {
                 // Which leaves are whose, and the ghost leaves each side of every rank pair, in leaf order.
-                owned_.assign(grid.leafCount(), 0);
-                for (auto& g : ghostsFrom_) g.clear();
-                ghostsFrom_.resize(std::size_t(comm_->size()));
+                rl.owned.assign(grid.leafCount(), 0);
+                for (auto& g : rl.ghostsFrom) g.clear();
+                rl.ghostsFrom.resize(std::size_t(comm_->size()));
                 for (std::size_t l = 0; l < grid.leafCount(); ++l) {
                     const int owner = ownerOf(leafOfNode(grid.leaf(l).origin));
-                    if (owner == comm_->rank()) owned_[l] = 1;
-                    else ghostsFrom_[std::size_t(owner)].push_back(uint32_t(l));
+                    if (owner == comm_->rank()) rl.owned[l] = 1;
+                    else rl.ghostsFrom[std::size_t(owner)].push_back(uint32_t(l));
                 }
-                ghostsFor_.assign(std::size_t(comm_->size()), {});
-                for (std::size_t r = 0; r < ghostCoordsFor_.size(); ++r)
-                    for (const Vec3i& c : ghostCoordsFor_[r]) ghostsFor_[r].push_back(grid.indexOfLeaf(c));
+                rl.ghostsFor.assign(std::size_t(comm_->size()), {});
+                for (std::size_t r = 0; r < rl.ghostCoordsFor.size(); ++r)
+                    for (const Vec3i& c : rl.ghostCoordsFor[r]) rl.ghostsFor[r].push_back(grid.indexOfLeaf(c));
             }
             clock.lap(phases_.topology);
             grid.sortParticles(requests);
@@ -402,105 +404,122 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     const double tEnd = state_.time + dt;
     const SurfaceContact surface = surfaceContact();
     const bool mirror = settings_.wallGhosts == WallGhosts::Mirror;
+    const bool ranks = partitioned_ && comm_->distributed();
+    const auto owned = [&](std::size_t f) { return ranks ? &rankLeaves_[f].owned : nullptr; };
+    // On ranks, the passes that read other leaves' nodes (contact normals, mirror images) read those other
+    // ranks own from their owners.
+    PhaseClock clock;
+    const auto local = [&](const Vec3i& node) { return ownerOf(leafOfNode(node)) == comm_->rank(); };
+    GridUpdateResult out;
     if (fields_.size() == 1) {
-        const bool ranks = partitioned_ && comm_->distributed();
-        GridUpdateResult r = updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface, true, ranks ? &owned_ : nullptr);
-        if (mirror && ranks) {
-            // Images in other ranks' leaves are read from their owners; the mirrored nodes then go to their
-            // holders with the other ghost velocities.
-            PhaseClock clock;
-            RemoteNodes remote;
-            remote.owned = &owned_;
-            remote.local = [&](const Vec3i& node) { return ownerOf(leafOfNode(node)) == comm_->rank(); };
-            remote.fetch = [&](const std::vector<Vec3i>& nodes, std::vector<float>& m, std::vector<Vec3f>& v) {
+        out = updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface, true, owned(0));
+    } else {
+        // Bodies of their own: velocities in every field, then the contact between them, then the colliders.
+        static const std::vector<std::unique_ptr<Collider>> kNone;
+        for (std::size_t f = 0; f < fields_.size(); ++f) updateGridVelocities(fields_[f], kNone, g, dt, tEnd, surface, true, owned(f));
+        RemoteFields remote;
+        if (ranks) {
+            for (std::size_t f = 0; f < fields_.size(); ++f) remote.owned.push_back(owned(f));
+            remote.local = local;
+            remote.fetch = [&](std::size_t f, const std::vector<Vec3i>& nodes, std::vector<float>& m) {
                 clock.lap(phases_.grid);
-                fetchNodes(fields_[0], nodes, m, v);
+                std::vector<Vec3f> unused;
+                fetchNodes(fields_[f], nodes, m, unused);
                 clock.lap(phases_.communication);
             };
-            mirrorGhostNodes(fields_[0], colliders_, tEnd, &remote);
-            clock.lap(phases_.grid);
-        } else if (mirror) {
-            mirrorGhostNodes(fields_[0], colliders_, tEnd);
         }
-        if (ranks) {
-            PhaseClock clock;
-            r.maxSpeed = comm_->max(r.maxSpeed);
-            comm_->sum(r.work);
-            sendGhostVelocities(fields_[0]);
-            clock.lap(phases_.communication);
+        resolveFieldContact(fields_, settings_.contactFriction, ranks ? &remote : nullptr);
+        for (std::size_t f = 0; f < fields_.size(); ++f) {
+            const GridUpdateResult r = updateGridVelocities(fields_[f], colliders_, g, dt, tEnd, surface, false, owned(f));
+            out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
+            out.work += r.work;
         }
-        return r;
     }
-    // Bodies of their own: velocities in every field, then the contact between them, then the colliders.
-    static const std::vector<std::unique_ptr<Collider>> kNone;
-    for (const SparseGrid& field : fields_) updateGridVelocities(field, kNone, g, dt, tEnd, surface);
-    resolveFieldContact(fields_, settings_.contactFriction);
-    GridUpdateResult out;
-    for (const SparseGrid& field : fields_) {
-        const GridUpdateResult r = updateGridVelocities(field, colliders_, g, dt, tEnd, surface, false);
-        if (mirror) mirrorGhostNodes(field, colliders_, tEnd);
-        out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
-        out.work += r.work;
+    if (mirror)
+        for (std::size_t f = 0; f < fields_.size(); ++f) {
+            RemoteNodes remote;
+            if (ranks) {
+                remote.owned = owned(f);
+                remote.local = local;
+                remote.fetch = [&](const std::vector<Vec3i>& nodes, std::vector<float>& m, std::vector<Vec3f>& v) {
+                    clock.lap(phases_.grid);
+                    fetchNodes(fields_[f], nodes, m, v);
+                    clock.lap(phases_.communication);
+                };
+            }
+            mirrorGhostNodes(fields_[f], colliders_, tEnd, ranks ? &remote : nullptr);
+        }
+    if (ranks) {
+        // The mirrored nodes go to their holders with the other ghost velocities.
+        clock.lap(phases_.grid);
+        out.maxSpeed = comm_->max(out.maxSpeed);
+        comm_->sum(out.work);
+        for (std::size_t f = 0; f < fields_.size(); ++f) sendGhostVelocities(fields_[f], rankLeaves_[f]);
+        clock.lap(phases_.communication);
     }
     return out;
 }
 
 void Simulation::scatter(float dt) {
     if (partitioned_ && comm_->distributed()) {
-        // Halo parts for ghost leaves go to their owners; the owners' leaves add every part in order d.
-        RemoteHalos remote;
-        remote.owned = &owned_;
-        remote.exchange = [&](HaloParts&& out) {
-            PhaseClock clock;
-            std::vector<Bytes> send(static_cast<std::size_t>(comm_->size()));
-            for (const HaloParts::Part& part : out.parts) {
-                Bytes& b = send[std::size_t(ownerOf(part.leaf))];
-                for (int a = 0; a < 3; ++a) put(b, int32_t(part.leaf[a]));
-                put(b, part.d);
-                putArray(b, part.lo, 3);
-                putArray(b, part.hi, 3);
-                std::size_t n = 1;
-                for (int a = 0; a < 3; ++a) n *= std::size_t(part.hi[a] - part.lo[a]);
-                put(b, uint64_t(n));
-                putArray(b, out.data.data() + 4 * part.offset, 4 * n);
-            }
-            const std::vector<Bytes> received = comm_->exchange(send);
-            HaloParts in;
-            // What each rank's stencils read of a ghost leaf is what its parts wrote there: the velocities go
-            // back for that box alone, not for all the owner wrote.
-            ghostBoxFor_.assign(received.size(), {});
-            for (std::size_t from = 0; from < received.size(); ++from) {
-                const Bytes& b = received[from];
-                const std::vector<Vec3i>& coords = ghostCoordsFor_[from];
-                ghostBoxFor_[from].assign(coords.size(), NodeBox{});
-                ByteReader r{b};
-                while (!r.done()) {
-                    HaloParts::Part part;
-                    for (int a = 0; a < 3; ++a) part.leaf[a] = r.get<int32_t>();
-                    part.d = r.get<int32_t>();
-                    r.getArray(part.lo, 3);
-                    r.getArray(part.hi, 3);
-                    const auto at = std::lower_bound(coords.begin(), coords.end(), part.leaf, mortonLess);
-                    if (at != coords.end() && *at == part.leaf) {
-                        NodeBox box;
-                        for (int a = 0; a < 3; ++a) {
-                            const int shift = kLeafDim * neighbourStep(part.d, a);
-                            box.lo[a] = int8_t(part.lo[a] - shift);
-                            box.hi[a] = int8_t(part.hi[a] - shift);
-                        }
-                        ghostBoxFor_[from][std::size_t(at - coords.begin())].add(box);
-                    }
-                    const std::size_t n = r.get<uint64_t>();
-                    part.offset = in.data.size() / 4;
-                    in.data.resize(in.data.size() + 4 * n);
-                    r.getArray(in.data.data() + 4 * part.offset, 4 * n);
-                    in.parts.push_back(part);
+        // Halo parts for ghost leaves go to their owners; the owners' leaves add every part in order d. Field by
+        // field (a leaf coordinate has one owner in every field).
+        for (std::size_t f = 0; f < fields_.size(); ++f) {
+            RankLeaves& rl = rankLeaves_[f];
+            RemoteHalos remote;
+            remote.owned = &rl.owned;
+            remote.exchange = [&](HaloParts&& out) {
+                PhaseClock clock;
+                std::vector<Bytes> send(static_cast<std::size_t>(comm_->size()));
+                for (const HaloParts::Part& part : out.parts) {
+                    Bytes& b = send[std::size_t(ownerOf(part.leaf))];
+                    for (int a = 0; a < 3; ++a) put(b, int32_t(part.leaf[a]));
+                    put(b, part.d);
+                    putArray(b, part.lo, 3);
+                    putArray(b, part.hi, 3);
+                    std::size_t n = 1;
+                    for (int a = 0; a < 3; ++a) n *= std::size_t(part.hi[a] - part.lo[a]);
+                    put(b, uint64_t(n));
+                    putArray(b, out.data.data() + 4 * part.offset, 4 * n);
                 }
-            }
-            clock.lap(phases_.communication);
-            return in;
-        };
-        particlesToGrid(fields_[0], state_.species, settings_.transfer, dt, &remote);
+                const std::vector<Bytes> received = comm_->exchange(send);
+                HaloParts in;
+                // What each rank's stencils read of a ghost leaf is what its parts wrote there: the velocities go
+                // back for that box alone, not for all the owner wrote.
+                rl.ghostBoxFor.assign(received.size(), {});
+                for (std::size_t from = 0; from < received.size(); ++from) {
+                    const Bytes& b = received[from];
+                    const std::vector<Vec3i>& coords = rl.ghostCoordsFor[from];
+                    rl.ghostBoxFor[from].assign(coords.size(), NodeBox{});
+                    ByteReader r{b};
+                    while (!r.done()) {
+                        HaloParts::Part part;
+                        for (int a = 0; a < 3; ++a) part.leaf[a] = r.get<int32_t>();
+                        part.d = r.get<int32_t>();
+                        r.getArray(part.lo, 3);
+                        r.getArray(part.hi, 3);
+                        const auto at = std::lower_bound(coords.begin(), coords.end(), part.leaf, mortonLess);
+                        if (at != coords.end() && *at == part.leaf) {
+                            NodeBox box;
+                            for (int a = 0; a < 3; ++a) {
+                                const int shift = kLeafDim * neighbourStep(part.d, a);
+                                box.lo[a] = int8_t(part.lo[a] - shift);
+                                box.hi[a] = int8_t(part.hi[a] - shift);
+                            }
+                            rl.ghostBoxFor[from][std::size_t(at - coords.begin())].add(box);
+                        }
+                        const std::size_t n = r.get<uint64_t>();
+                        part.offset = in.data.size() / 4;
+                        in.data.resize(in.data.size() + 4 * n);
+                        r.getArray(in.data.data() + 4 * part.offset, 4 * n);
+                        in.parts.push_back(part);
+                    }
+                }
+                clock.lap(phases_.communication);
+                return in;
+            };
+            withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) { particlesToGrid(grid, species, settings_.transfer, dt, &remote); });
+        }
         return;
     }
     for (std::size_t f = 0; f < fields_.size(); ++f)
@@ -690,7 +709,10 @@ FrameStats Simulation::measure() const {
         sums.maxJ = comm_->max(sums.maxJ);
         sums.particles = std::size_t(comm_->sum((long long)sums.particles));
         // A leaf counts once, on its owner (the others hold it as a ghost).
-        if (partitioned_) leaves = std::size_t(std::count(owned_.begin(), owned_.end(), uint8_t(1)));
+        if (partitioned_) {
+            leaves = 0;
+            for (const RankLeaves& f : rankLeaves_) leaves += std::size_t(std::count(f.owned.begin(), f.owned.end(), uint8_t(1)));
+        }
         leaves = std::size_t(comm_->sum((long long)leaves));
     }
     FrameStats st = sums.stats();
@@ -830,8 +852,6 @@ void Simulation::distribute(const Comm& comm) {
     comm_ = &comm;
     guard_.setComm(&comm);
     if (!comm.distributed()) return;
-    if (fields_.size() > 1 || settings_.contact == ContactModel::MultiField)
-        throw std::invalid_argument("simulation.contact = \"multi_field\" runs on one rank only for now");
     // Every rank holds every particle here (or its share: then the counts are every rank's, merged), and the
     // same emitters, so each computes the same cut: from the particles, and from the sets about to be emitted
     // at this frame. Called before the first emission, no rank ever holds the whole scene's particles.
@@ -911,7 +931,7 @@ void Simulation::migrateParticles() {
     }
 }
 
-void Simulation::exchangeReachedLeaves(SparseGrid& grid) {
+void Simulation::exchangeReachedLeaves(SparseGrid& grid, RankLeaves& leaves) {
     // Each rank tells the owners of the leaves its stencils reach that it holds them as ghosts: the owner
     // must allocate them (its own particles may not reach them) and send their velocities back.
     const int R = comm_->size(), me = comm_->rank();
@@ -922,7 +942,7 @@ void Simulation::exchangeReachedLeaves(SparseGrid& grid) {
         for (int a = 0; a < 3; ++a) put(out[std::size_t(owner)], int32_t(c[a]));
     }
     const std::vector<Bytes> in = comm_->exchange(out);
-    ghostCoordsFor_.assign(std::size_t(R), {});
+    leaves.ghostCoordsFor.assign(std::size_t(R), {});
     std::vector<Vec3i> all;
     for (int r = 0; r < R; ++r) {
         if (r == me) continue;
@@ -930,23 +950,23 @@ void Simulation::exchangeReachedLeaves(SparseGrid& grid) {
         while (!reader.done()) {
             Vec3i c;
             for (int a = 0; a < 3; ++a) c[a] = reader.get<int32_t>();
-            ghostCoordsFor_[std::size_t(r)].push_back(c);
+            leaves.ghostCoordsFor[std::size_t(r)].push_back(c);
             all.push_back(c);
         }
     }
     grid.addReachedLeaves(all);
 }
 
-void Simulation::sendGhostVelocities(SparseGrid& grid) {
+void Simulation::sendGhostVelocities(SparseGrid& grid, const RankLeaves& leaves) {
     // Owners send the nodes P2G wrote in each ghost leaf (box, then velocities); holders replace theirs.
     const int R = comm_->size(), me = comm_->rank();
     std::vector<Bytes> out(static_cast<std::size_t>(R));
     for (int r = 0; r < R; ++r) {
         if (r == me) continue;
         Bytes& b = out[std::size_t(r)];
-        for (std::size_t k = 0; k < ghostsFor_[std::size_t(r)].size(); ++k) {
-            const uint32_t l = ghostsFor_[std::size_t(r)][k];
-            const NodeBox& box = ghostBoxFor_[std::size_t(r)][k];
+        for (std::size_t k = 0; k < leaves.ghostsFor[std::size_t(r)].size(); ++k) {
+            const uint32_t l = leaves.ghostsFor[std::size_t(r)][k];
+            const NodeBox& box = leaves.ghostBoxFor[std::size_t(r)][k];
             putArray(b, box.lo, 3);
             putArray(b, box.hi, 3);
             const float* v = grid.leaf(l).momentum;
@@ -957,7 +977,7 @@ void Simulation::sendGhostVelocities(SparseGrid& grid) {
     for (int r = 0; r < R; ++r) {
         if (r == me) continue;
         ByteReader reader{in[std::size_t(r)]};
-        for (uint32_t l : ghostsFrom_[std::size_t(r)]) {
+        for (uint32_t l : leaves.ghostsFrom[std::size_t(r)]) {
             const LeafView& leaf = grid.leaf(l);
             grid.writtenBox(l).forEach([&](int n) {
                 leaf.mass[n] = 0.0f;

@@ -197,7 +197,12 @@ public:
     /// Times the ranks re-cut their leaves since the start of this process.
     int rebalanceCount() const { return rebalances_; }
     /// Leaves this rank holds as ghosts of other ranks' (0 on one process).
-    std::size_t ghostLeafCount() const { return partitioned_ ? owned_.size() - std::size_t(std::count(owned_.begin(), owned_.end(), uint8_t(1))) : 0; }
+    std::size_t ghostLeafCount() const {
+        std::size_t n = 0;
+        if (partitioned_)
+            for (const RankLeaves& f : rankLeaves_) n += f.owned.size() - std::size_t(std::count(f.owned.begin(), f.owned.end(), uint8_t(1)));
+        return n;
+    }
     /// The rank owning a leaf (by leaf coordinate).
     int ownerOf(const Vec3i& leafCoord) const;
     float kernelInertiaScale() const;
@@ -205,6 +210,14 @@ public:
     void resetPhaseSeconds() { phases_ = PhaseSeconds(); }
 
 private:
+    /// One velocity field's leaves on ranks: whose they are, and the ghost leaves each side of every rank pair.
+    struct RankLeaves {
+        std::vector<uint8_t> owned;                     ///< per leaf of the field: owned by this rank
+        std::vector<std::vector<uint32_t>> ghostsFrom;  ///< per rank: this rank's ghost leaves that rank owns
+        std::vector<std::vector<uint32_t>> ghostsFor;   ///< per rank: owned leaves that rank holds as ghosts
+        std::vector<std::vector<Vec3i>> ghostCoordsFor;  ///< the same by leaf coordinate, as that rank sent them
+        std::vector<std::vector<NodeBox>> ghostBoxFor;   ///< per rank and ghost leaf: the nodes that rank's halo parts wrote
+    };
     void runFrameSubsteps();
     // Ranks (docs/distributed.md): the cut of the leaves, particles moving to their leaf's owner, the leaves
     // other ranks' stencils reach, and the ghost leaves' velocities after the grid update.
@@ -214,8 +227,8 @@ private:
     std::vector<std::pair<Vec3i, long long>> allParticlesPerLeaf() const;
     void rebalanceIfNeeded();
     void migrateParticles();
-    void exchangeReachedLeaves(SparseGrid& grid);
-    void sendGhostVelocities(SparseGrid& grid);
+    void exchangeReachedLeaves(SparseGrid& grid, RankLeaves& leaves);
+    void sendGhostVelocities(SparseGrid& grid, const RankLeaves& leaves);
     /// The mass and velocity of nodes other ranks own, from their owners (the mirror pass). Collective.
     void fetchNodes(const SparseGrid& grid, const std::vector<Vec3i>& nodes, std::vector<float>& mass, std::vector<Vec3f>& velocity);
     /// Globalises a G2P summary: extremes over ranks, and the bad particle one process would report first.
@@ -266,11 +279,7 @@ private:
     std::vector<Vec3i> splitters_;  ///< leaf coordinate where rank r + 1's range starts (Morton order)
     bool partitioned_ = false;
     bool holdsShare_ = false;  ///< restored from checkpoint parts: distribute() merges every rank's counts
-    std::vector<uint8_t> owned_;                     ///< per leaf of the grid: owned by this rank
-    std::vector<std::vector<uint32_t>> ghostsFrom_;  ///< per rank: this rank's ghost leaves that rank owns
-    std::vector<std::vector<uint32_t>> ghostsFor_;   ///< per rank: owned leaves that rank holds as ghosts
-    std::vector<std::vector<Vec3i>> ghostCoordsFor_;  ///< the same by leaf coordinate, as that rank sent them
-    std::vector<std::vector<NodeBox>> ghostBoxFor_;   ///< per rank and ghost leaf: the nodes that rank's halo parts wrote
+    std::vector<RankLeaves> rankLeaves_;  ///< per field
     std::vector<int> ownerScratch_;  ///< migration: the owner of each particle's leaf
     int rebalances_ = 0;
     double cutImbalance_ = 0.0;  ///< how far above the mean the last cut left the most loaded rank

@@ -195,13 +195,7 @@ void SceneRun::removeOldOutputs() {
     if (removed) events_.note("removed " + std::to_string(removed) + " frame and checkpoint files of an earlier run of this scene");
 }
 
-void SceneRun::spread() {
-    try {
-        sim_->distribute(Comm::world());
-    } catch (const std::invalid_argument& e) {
-        throw SceneError(scene_.file + ": " + e.what() + "; run it as one process (without mpirun)");
-    }
-}
+void SceneRun::spread() { sim_->distribute(Comm::world()); }
 
 void SceneRun::chooseStart() {
     // On several ranks the leaves are cut before the first emission (each rank keeps its share of the sets

@@ -61,7 +61,7 @@ private:
     template <class F>
     void guarded(const std::string& what, F&& f);
     void chooseStart();
-    /// Spreads the simulation over the ranks (Simulation::distribute); what runs on one rank only is a SceneError.
+    /// Spreads the simulation over the ranks (Simulation::distribute).
     void spread();
     /// Frame `frame`'s files (when `write`; else its stats row only): gathered, per rank, or one process's.
     void writeFrame(int frame, const FrameStats& stats, bool write);

@@ -20,7 +20,8 @@ slow='^(SceneChecks|Validation|MovingCollider)\.|^Safety\.(Killed|Signals|ACorru
 slow+='^Ranks\.|^MultiField\.(TwoElastic|ABlock)|^MeshCollider\.WaterAtRest|^VdbCollider\.ARising|^Cli\.ValidateShipped|^RigidRotation\.Apic|^ContinuousSource\.Resuming'
 ctest --test-dir "$build" -L unit -E "$slow" --output-on-failure -j2
 # The rank layer under the sanitizers: a scene with water, jelly, emitters and friction colliders on 1 and 3
-# ranks (mpirun on loopback) must run clean and write the same bits. Leak checking is off for it alone:
+# ranks (mpirun on loopback), and one of bodies with fields of their own on mirrored walls on 1 and 2, must run
+# clean and write the same bits. Leak checking is off for it alone:
 # OpenMPI keeps allocations past MPI_Finalize.
 if command -v mpirun >/dev/null && nm -u "$build/mpm" 2>/dev/null | grep MPI_Init_thread >/dev/null; then
   out=$(mktemp -d)
@@ -29,5 +30,10 @@ if command -v mpirun >/dev/null && nm -u "$build/mpm" 2>/dev/null | grep MPI_Ini
   mpirun --allow-run-as-root --oversubscribe --bind-to none -x ASAN_OPTIONS -x UBSAN_OPTIONS -np 3 \
     "$build/mpm" run tests/scenes/ranks_mix.json -o "$out/three" --threads 1 --quiet
   bash tools/compare_runs.sh "$out/one" "$out/three"
+  # Bodies with velocity fields of their own over a mirrored wall: the passes that read other ranks' nodes.
+  "$build/mpm" run tests/scenes/bodies.json -o "$out/bodies_one" --threads 2 --quiet
+  mpirun --allow-run-as-root --oversubscribe --bind-to none -x ASAN_OPTIONS -x UBSAN_OPTIONS -np 2 \
+    "$build/mpm" run tests/scenes/bodies.json -o "$out/bodies_two" --threads 1 --quiet
+  bash tools/compare_runs.sh "$out/bodies_one" "$out/bodies_two"
   rm -rf "$out"
 fi
