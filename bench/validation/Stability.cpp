@@ -47,9 +47,18 @@ std::string set(const std::string& name, const std::string& material, const std:
            shape + R"(, "velocity": )" + velocity + R"(, "sampling": ")" + sampling + R"(" })";
 }
 
+/// Setups named "<setup>_mirror" are <setup> with simulation.wall_ghosts = "mirror" (their walls are sticky).
+constexpr const char* kMirrorSuffix = "_mirror";
+bool mirrored(const std::string& setup) {
+    const std::string suffix = kMirrorSuffix;
+    return setup.size() > suffix.size() && setup.compare(setup.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+std::string baseSetup(const std::string& setup) { return mirrored(setup) ? setup.substr(0, setup.size() - std::string(kMirrorSuffix).size()) : setup; }
+
 std::string scene(const StabilityRun& r, const std::string& sets, const std::string& colliders, bool gravity) {
     std::ostringstream s;
     s << R"({ "simulation": { "frames": 1, "fps": 1, "substeps": 1, "dx": )" << kDx << R"(, "cfl": )" << r.cfl
+      << (mirrored(r.setup) ? R"(, "wall_ghosts": "mirror")" : "")
       << R"(, "interpolation": ")" << (r.interpolation == Interpolation::Cubic ? "cubic" : "quadratic") << R"(", "gravity": )"
       << (gravity ? vec(0, -9.81, 0) : vec(0, 0, 0)) << R"(, "energy_growth_limit": 0.5 },)"
       << R"( "output": { "surface": false }, "sets": [ )" << sets << R"( ], "colliders": [ )" << colliders << " ] }";
@@ -73,31 +82,32 @@ bool needsWaveSpeed(const std::string& setup) { return setup == "collision" || s
 
 /// c: the material's rest wave speed, for the setups that need it.
 std::string sceneText(const StabilityRun& r, double c) {
+    const std::string setup = baseSetup(r.setup);
     const std::string& m = r.material;
     const std::string zero = vec(0, 0, 0);
     const double b = kBlock;
-    if (r.setup == "resting_block") return scene(r, set("block", m, "{}", box(0, 0, 0, b, b, b), zero), kFloor, true);
-    if (r.setup == "steel_block" || r.setup == "soft_block") {
-        const std::string params = materialParams(m, r.setup == "steel_block" ? "steel" : "soft");
+    if (setup == "resting_block") return scene(r, set("block", m, "{}", box(0, 0, 0, b, b, b), zero), kFloor, true);
+    if (setup == "steel_block" || setup == "soft_block") {
+        const std::string params = materialParams(m, setup == "steel_block" ? "steel" : "soft");
         return scene(r, set("block", m, params, box(0, 0, 0, b, b, b), zero), kFloor, true);
     }
-    if (r.setup == "sliver")  // one particle thick: a lattice of spacing dx / 2 in a slab dx / 2 high
+    if (setup == "sliver")  // one particle thick: a lattice of spacing dx / 2 in a slab dx / 2 high
         return scene(r, set("sliver", m, "{}", box(0, 0.1, 0, 0.2, 0.1 + 0.5 * kDx, 0.2), zero), kFloor, true);
-    if (r.setup == "dropped_column")  // a column dropped from twice its height
+    if (setup == "dropped_column")  // a column dropped from twice its height
         return scene(r, set("column", m, "{}", box(0, 2 * b, 0, 0.5 * b, 3 * b, 0.5 * b), zero), kFloor, true);
-    if (r.setup == "wall_impact")
+    if (setup == "wall_impact")
         return scene(
             r, set("body", m, "{}", box(0, 0, 0, b, b, b), vec(kImpactSpeed, 0, 0)),
             R"({ "type": "plane", "point": )" + vec(b + 2 * kDx, 0, 0) + R"(, "normal": [-1, 0, 0], "boundary": "sticky" })",
             false);
-    if (r.setup == "collision") {
+    if (setup == "collision") {
         const double v = 0.5 * kCollisionFraction * c;
         return scene(r,
                      set("left", m, "{}", box(0, 0, 0, b, b, b), vec(v, 0, 0)) + ", " +
                          set("right", m, "{}", box(b + kDx, 0, 0, 2 * b + kDx, b, b), vec(-v, 0, 0)),
                      "", false);
     }
-    if (r.setup == "spinning_sphere")  // spin set after loading: v = w x r, C = [w]x
+    if (setup == "spinning_sphere")  // spin set after loading: v = w x r, C = [w]x
         return scene(r,
                      set("sphere", m, "{}",
                          R"({ "type": "sphere", "center": [0, 0, 0], "radius": )" + std::to_string(kSphereRadius) + " }", zero),
@@ -120,8 +130,11 @@ void spin(Simulation& sim, double omega) {
 }  // namespace
 
 const std::vector<std::string>& stabilitySetups() {
-    static const std::vector<std::string> s = {"resting_block",  "sliver",      "collision",  "spinning_sphere",
-                                               "dropped_column", "steel_block", "soft_block", "wall_impact"};
+    // The setups with sticky walls once more with mirrored ghost nodes (simulation.wall_ghosts = "mirror").
+    static const std::vector<std::string> s = {"resting_block",        "sliver",         "collision",          "spinning_sphere",
+                                               "dropped_column",       "steel_block",    "soft_block",         "wall_impact",
+                                               "resting_block_mirror", "sliver_mirror",  "dropped_column_mirror",
+                                               "steel_block_mirror",   "soft_block_mirror", "wall_impact_mirror"};
     return s;
 }
 
