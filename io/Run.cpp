@@ -249,52 +249,43 @@ void SceneRun::chooseStart() {
 
 bool SceneRun::readCheckpointOf(const CheckpointFiles& files, Checkpoint& c, bool& share, std::string& path) {
     const Comm& comm = Comm::world();
-    std::string error;
-    if (!files.whole.empty()) {
-        // A whole checkpoint: every rank reads it and keeps its share (distribute).
-        path = files.whole;
+    // Runs a read on every rank; what the first rank to fail says, every rank gets (empty: none failed).
+    const auto agreed = [&](auto&& read) {
+        std::string error;
         try {
-            c = readCheckpoint(path);
+            read();
         } catch (const CheckpointError& e) {
             error = e.what();
         }
-        error = firstError(comm, error);
+        return firstError(comm, error);
+    };
+    if (!files.whole.empty()) {
+        // A whole checkpoint: every rank reads it and keeps its share (distribute).
+        path = files.whole;
+        const std::string error = agreed([&] { c = readCheckpoint(path); });
         if (error.empty()) return true;
         events_.warning(error + (files.parts.empty() ? "; trying the one before" : "; trying its parts"));
         if (files.parts.empty()) return false;
-        error.clear();
     }
     // Parts of a set: rank r of M reads parts k with k M / N = r (all of them alone, none when M > N), then
     // the particles go to their owners (distribute); a rank without a part takes the scalars from rank 0.
     std::vector<std::string> paths;
-    try {
-        paths = completeSet(files);
-    } catch (const CheckpointError& e) {
-        error = e.what();
-    }
-    error = firstError(comm, error);
-    if (!error.empty()) {
-        events_.warning(error + "; trying the one before");
-        return false;
-    }
-    path = paths.front().substr(0, paths.front().size() - std::string("_rank000.mpmc").size()) + "_rank*.mpmc";
-    const long long N = (long long)paths.size(), M = comm.size();
     bool first = true;
-    try {
+    const std::string setError = agreed([&] { paths = completeSet(files); });
+    const std::string partError = setError.empty() ? agreed([&] {
+        const long long N = (long long)paths.size(), M = comm.size();
         for (long long k = 0; k < N; ++k) {
             if (k * M / N != comm.rank()) continue;
             Checkpoint part = readCheckpoint(paths[std::size_t(k)]);
             if (first) c = std::move(part), first = false;
             else appendSpecies(c.state, std::move(part.state));
         }
-    } catch (const CheckpointError& e) {
-        error = e.what();
-    }
-    error = firstError(comm, error);
-    if (!error.empty()) {
-        events_.warning(error + "; trying the one before");
+    }) : setError;
+    if (!partError.empty()) {
+        events_.warning(partError + "; trying the one before");
         return false;
     }
+    path = paths.front().substr(0, paths.front().size() - std::string("_rank000.mpmc").size()) + "_rank*.mpmc";
     if (comm.distributed()) {
         // Ranks that read no part (more ranks than parts) need the run's scalars and species, without particles.
         Bytes skeleton;

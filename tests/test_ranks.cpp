@@ -60,6 +60,20 @@ int count(const std::string& text, const std::string& what) {
     return n;
 }
 
+/// A 3-frame scene on one process and on each (ranks, threads): every rank holds a share, and the frames,
+/// PLY files and stats are one process's bits.
+void expectSameBitsOnRanks(const std::string& scene, const std::string& name, const std::string& dir,
+                           const std::vector<std::pair<int, const char*>>& runs) {
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/one", "--quiet", "--threads", "1"}, dir).code, 0);
+    for (const auto& [ranks, threads] : runs) {
+        const std::string out = dir + "/ranks" + std::to_string(ranks);
+        const Result r = runRanks(ranks, {"run", scene, "-o", out, "--threads", threads}, dir);
+        ASSERT_EQ(r.code, 0) << r.output;
+        EXPECT_GT(spread(r.output).first, 0) << r.output;
+        expectSameOutput(dir + "/one", out, name, 9);
+    }
+}
+
 #define REQUIRE_MPI() \
     if (!kMpiexec) GTEST_SKIP() << "built without MPI"
 
@@ -223,14 +237,7 @@ TEST(Ranks, MirroredWallsGiveTheBitsOfOneProcess) {
                   "shape": { "type": "box", "min": [0.2, 0.02, -0.1], "max": [0.36, 0.2, 0.1] } } ],
       "colliders": [ { "type": "plane", "boundary": "sticky" },
                      { "type": "plane", "point": [0.4, 0, 0], "normal": [-1, 0, 0], "boundary": "slip" } ] })");
-    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/one", "--quiet", "--threads", "1"}, dir).code, 0);
-    for (int ranks : {2, 3}) {
-        const std::string out = dir + "/ranks" + std::to_string(ranks);
-        const Result r = runRanks(ranks, {"run", scene, "-o", out, "--threads", "1"}, dir);
-        ASSERT_EQ(r.code, 0) << r.output;
-        EXPECT_GT(spread(r.output).first, 0) << r.output;
-        expectSameOutput(dir + "/one", out, "mirror", 9);
-    }
+    expectSameBitsOnRanks(scene, "mirror", dir, {{2, "1"}, {3, "1"}});
 }
 
 TEST(Ranks, BodiesWithFieldsOfTheirOwnGiveTheBitsOfOneProcess) {
@@ -240,14 +247,7 @@ TEST(Ranks, BodiesWithFieldsOfTheirOwnGiveTheBitsOfOneProcess) {
     // over a mirrored slip floor: the contact normals near a range's end read masses of leaves another rank
     // owns, in every field.
     const std::string scene = std::string(MPM_SOURCE_DIR) + "/tests/scenes/bodies.json";
-    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/one", "--quiet", "--threads", "1"}, dir).code, 0);
-    for (const auto& [ranks, threads] : {std::pair{2, "2"}, std::pair{3, "1"}}) {
-        const std::string out = dir + "/ranks" + std::to_string(ranks);
-        const Result r = runRanks(ranks, {"run", scene, "-o", out, "--threads", threads}, dir);
-        ASSERT_EQ(r.code, 0) << r.output;
-        EXPECT_GT(spread(r.output).first, 0) << r.output;
-        expectSameOutput(dir + "/one", out, "bodies", 9);
-    }
+    expectSameBitsOnRanks(scene, "bodies", dir, {{2, "2"}, {3, "1"}});
 }
 
 TEST(Ranks, PerRankPartFilesHoldEveryParticleOnceWithTheBitsOfTheWholeFrame) {
