@@ -89,8 +89,6 @@ bool velocityAt(const Vec3d& cells, Read&& read, Vec3f& v) {
     v = sum / weightSum;
     return true;
 }
-
-bool lexicographic(const Vec3i& a, const Vec3i& b) { return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3); }
 }  // namespace
 
 std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd,
@@ -130,7 +128,7 @@ std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::uniq
                 forEachCorner(gh.g.mirror * invDx, [&](const Vec3i& node, float) {
                     if (!remote->local(node)) far.push_back(node);
                 });
-        std::sort(far.begin(), far.end(), lexicographic);
+        std::sort(far.begin(), far.end(), nodeLess);
         far.erase(std::unique(far.begin(), far.end()), far.end());
         remote->fetch(far, farMass, farVelocity);
     }
@@ -141,7 +139,7 @@ std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::uniq
             const LeafView* near = &grid.leaf(l);
             const auto read = [&](const Vec3i& node, float& m, Vec3f& v) {
                 if (remote && !remote->local(node)) {
-                    const std::size_t k = std::size_t(std::lower_bound(far.begin(), far.end(), node, lexicographic) - far.begin());
+                    const std::size_t k = std::size_t(std::lower_bound(far.begin(), far.end(), node, nodeLess) - far.begin());
                     m = farMass[k];
                     v = farVelocity[k];
                     return true;

@@ -1,15 +1,13 @@
 #include "core/MultiField.h"
 
+#include <algorithm>
+
 #include "sparse/LeafLookup.h"
 #include "sparse/LeafParallel.h"
-
-#include <algorithm>
 
 namespace mpm {
 
 namespace {
-
-bool lexicographic(const Vec3i& a, const Vec3i& b) { return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3); }
 
 /// Central difference of a field's node masses (the direction is all that is used; the spacing drops out).
 /// `massAt(node)` reads the field.
@@ -80,7 +78,7 @@ FieldContactSummary resolveFieldContact(std::vector<SparseGrid>& fields, float f
                 });
             }
         for (std::size_t g = 0; g < F; ++g) {
-            std::sort(far[g].begin(), far[g].end(), lexicographic);
+            std::sort(far[g].begin(), far[g].end(), nodeLess);
             far[g].erase(std::unique(far[g].begin(), far[g].end()), far[g].end());
             remote->fetch(g, far[g], farMass[g]);
         }
@@ -110,7 +108,7 @@ FieldContactSummary resolveFieldContact(std::vector<SparseGrid>& fields, float f
                             momentum += at.mass[n] * Eigen::Map<const Vec3f>(at.momentum + 3 * n);
                             gradient[k] = massGradient(node, [&](const Vec3i& x) {
                                 if (remote && !remote->local(x))
-                                    return farMass[g][std::size_t(std::lower_bound(far[g].begin(), far[g].end(), x, lexicographic) - far[g].begin())];
+                                    return farMass[g][std::size_t(std::lower_bound(far[g].begin(), far[g].end(), x, nodeLess) - far[g].begin())];
                                 return lookup[g].massAt(x, &at);
                             });
                             sum += gradient[k];
