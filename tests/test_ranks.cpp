@@ -112,8 +112,10 @@ TEST(Ranks, ABlowUpOnOneRankIsReportedOnceAndEveryRankExitsOne) {
       "colliders": [ { "type": "plane" } ] })");
     const Result one = runMpm({"run", scene, "-o", dir + "/one", "--quiet"}, dir);
     ASSERT_EQ(one.code, 1) << one.output;
-    // Each rank says how it ended.
-    const std::string each = std::string(MPM_BINARY) + " run " + scene + " -o " + dir + "/two --quiet --threads 1; c=$?; echo rank exit $c; exit $c";
+    // Each rank says how it ended, then waits: mpirun kills the other ranks as soon as one exits nonzero, which
+    // could otherwise come before a slower rank has said it.
+    const std::string each = std::string(MPM_BINARY) + " run " + scene + " -o " + dir +
+                             "/two --quiet --threads 1; c=$?; echo rank exit $c; sleep 2; exit $c";
     std::vector<std::string> args{"--allow-run-as-root", "--oversubscribe", "-np", "2", "/bin/sh", "-c", each};
     Child c = start(args, dir + "/mpirun.log", kMpiexec);
     const int code = c.wait();
