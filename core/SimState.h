@@ -41,6 +41,17 @@ struct SimState {
     StepBounds bounds;
     EnergyReference energy;
 
+    /// Everything but the particles: the scalars, and each species' name and parameters with no particle.
+    SimState withoutParticles() const {
+        SimState out;
+        out.time = time, out.frame = frame, out.substeps = substeps, out.frameSubsteps = frameSubsteps;
+        out.nextId = nextId, out.emittedFrame = emittedFrame, out.retries = retries;
+        out.streamFlow = streamFlow, out.streamLayers = streamLayers, out.bounds = bounds, out.energy = energy;
+        for (const AnySpecies& s : species)
+            std::visit([&](const auto& sp) { out.species.emplace_back(std::decay_t<decltype(sp)>{sp.name, sp.params, {}, {}, {}}); }, s);
+        return out;
+    }
+
     /// Calls f on every field but the species and the stiffness keys, in a fixed order (checkpoints write
     /// them in this order).
     template <class F>

@@ -79,7 +79,7 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
     if (partitioned_ && comm_->distributed()) {
         std::vector<std::size_t> keep;
         for (std::size_t i = 0; i < x.size(); ++i)
-            if (ownerOf(leafOfNode(fields_[0].baseNode(x[i]))) == comm_->rank()) keep.push_back(i);
+            if (ownerOf(particleLeaf(x[i])) == comm_->rank()) keep.push_back(i);
         auto pick = [&](const auto& all) {
             std::decay_t<decltype(all)> out;
             if (all.empty()) return out;
@@ -811,7 +811,7 @@ std::vector<std::pair<Vec3i, long long>> countPerLeaf(const std::vector<Vec3d>& 
 }  // namespace
 
 std::vector<std::pair<Vec3i, long long>> Simulation::particlesPerLeaf() const {
-    const auto leafOf = [&](const Vec3d& x) { return leafOfNode(fields_[0].baseNode(x)); };
+    const auto leafOf = [&](const Vec3d& x) { return particleLeaf(x); };
     std::vector<std::pair<Vec3i, long long>> all;
     for (const AnySpecies& s : state_.species) {
         const auto c = countPerLeaf(particlesOf(s).x, leafOf);
@@ -867,7 +867,7 @@ void Simulation::distribute(const Comm& comm) {
     // at this frame. Called before the first emission, no rank ever holds the whole scene's particles.
     std::vector<std::pair<Vec3i, long long>> counts = holdsShare_ ? allParticlesPerLeaf() : particlesPerLeaf();
     if (state_.emittedFrame != state_.frame) {
-        const auto leafOf = [&](const Vec3d& x) { return leafOfNode(fields_[0].baseNode(x)); };
+        const auto leafOf = [&](const Vec3d& x) { return particleLeaf(x); };
         for (const Emitter& e : emitters_)
             if (e.emitsAt(state_.frame)) {
                 const auto c = countPerLeaf(e.positions, leafOf);
@@ -890,7 +890,7 @@ void Simulation::distribute(const Comm& comm) {
                 // Owners first: keepWhere moves the positions before the other arrays.
                 std::vector<int>& owner = ownerScratch_;
                 owner.resize(sp.p.size());
-                for (std::size_t i = 0; i < owner.size(); ++i) owner[i] = ownerOf(leafOfNode(fields_[0].baseNode(sp.p.x[i])));
+                for (std::size_t i = 0; i < owner.size(); ++i) owner[i] = ownerOf(particleLeaf(sp.p.x[i]));
                 keepWhere(sp, [&](std::size_t i) { return owner[i] == comm.rank(); });
                 sp.forEachArray([](auto& arr) { arr.shrink_to_fit(); });  // the whole scene's memory goes back
                 sp.leafStart.clear();
@@ -918,7 +918,7 @@ void Simulation::migrateParticles() {
                 std::vector<int>& owner = ownerScratch_;
                 owner.resize(sp.p.size());
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, owner.size(), kPermuteGrain), [&](const auto& r) {
-                    for (std::size_t i = r.begin(); i < r.end(); ++i) owner[i] = ownerOf(leafOfNode(fields_[0].baseNode(sp.p.x[i])));
+                    for (std::size_t i = r.begin(); i < r.end(); ++i) owner[i] = ownerOf(particleLeaf(sp.p.x[i]));
                 });
                 // Few leave in a substep (those crossing a range's boundary): pack and compact only when some do.
                 std::vector<std::vector<uint32_t>> leaving(static_cast<std::size_t>(R));
@@ -1110,11 +1110,8 @@ std::vector<AnySpecies> Simulation::gatherSpecies() const {
 }
 
 SimState Simulation::gatherState() {
-    std::vector<AnySpecies> whole = gatherSpecies();
-    std::vector<AnySpecies> mine = std::move(state_.species);
-    SimState copy = state_;  // everything but the particles, which are the gathered ones
-    state_.species = std::move(mine);
-    copy.species = std::move(whole);
+    SimState copy = state_.withoutParticles();
+    copy.species = gatherSpecies();
     return copy;
 }
 

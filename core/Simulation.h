@@ -205,6 +205,8 @@ public:
     }
     /// The rank owning a leaf (by leaf coordinate).
     int ownerOf(const Vec3i& leafCoord) const;
+    /// The leaf a particle at x belongs to: its base node's (the same in every field).
+    Vec3i particleLeaf(const Vec3d& x) const { return leafOfNode(fields_[0].baseNode(x)); }
     float kernelInertiaScale() const;
     const PhaseSeconds& phaseSeconds() const { return phases_; }
     void resetPhaseSeconds() { phases_ = PhaseSeconds(); }

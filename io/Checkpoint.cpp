@@ -363,7 +363,8 @@ std::string checkpointPath(const std::string& dir, const std::string& scene, int
 
 std::string checkpointPartPath(const std::string& dir, const std::string& scene, int frame, int part) {
     char buf[48];
-    std::snprintf(buf, sizeof(buf), "%04d_rank%03d", frame, part);
+    if (part < 0) std::snprintf(buf, sizeof(buf), "%04d_rank*", frame);
+    else std::snprintf(buf, sizeof(buf), "%04d_rank%03d", frame, part);
     return dir + "/" + scene + "_checkpoint_" + buf + ".mpmc";
 }
 

@@ -66,7 +66,8 @@ CheckpointInfo readCheckpointInfo(const std::string& path);
 
 /// "<dir>/<scene>_checkpoint_NNNN.mpmc".
 std::string checkpointPath(const std::string& dir, const std::string& scene, int frame);
-/// Part `part` of a set: "<dir>/<scene>_checkpoint_NNNN_rankRRR.mpmc".
+/// Part `part` of a set: "<dir>/<scene>_checkpoint_NNNN_rankRRR.mpmc"; part -1: the set as a pattern,
+/// "..._NNNN_rank*.mpmc" (for messages).
 std::string checkpointPartPath(const std::string& dir, const std::string& scene, int frame, int part);
 
 /// The files of one frame's checkpoint: a whole one, or the part files found (by part number; not yet checked

@@ -285,18 +285,13 @@ bool SceneRun::readCheckpointOf(const CheckpointFiles& files, Checkpoint& c, boo
         events_.warning(partError + "; trying the one before");
         return false;
     }
-    path = paths.front().substr(0, paths.front().size() - std::string("_rank000.mpmc").size()) + "_rank*.mpmc";
+    path = checkpointPartPath(dir_, scene_.name, files.frame, -1);
     if (comm.distributed()) {
         // Ranks that read no part (more ranks than parts) need the run's scalars and species, without particles.
         Bytes skeleton;
         if (comm.rank() == 0) {
-            std::vector<AnySpecies> particles = std::move(c.state.species);
-            SimState empty = c.state;  // the scalars, then the species without their particles
-            c.state.species = std::move(particles);
-            for (const AnySpecies& s : c.state.species)
-                std::visit([&](const auto& sp) { empty.species.emplace_back(std::decay_t<decltype(sp)>{sp.name, sp.params, {}, {}, {}}); }, s);
             std::ostringstream os;
-            encodeCheckpoint(os, c.info, empty);
+            encodeCheckpoint(os, c.info, c.state.withoutParticles());
             const std::string bytes = os.str();
             putArray(skeleton, bytes.data(), bytes.size());
         }
@@ -337,8 +332,7 @@ void SceneRun::saveCheckpointParts() {
     info.part = comm.rank();
     info.parts = comm.size();
     info.set.assign(reinterpret_cast<const char*>(id.data()), id.size());
-    lastCheckpoint_ = checkpointPartPath(dir_, scene_.name, s.frame, 0);
-    lastCheckpoint_ = lastCheckpoint_.substr(0, lastCheckpoint_.size() - std::string("000.mpmc").size()) + "*.mpmc";
+    lastCheckpoint_ = checkpointPartPath(dir_, scene_.name, s.frame, -1);
     agreeOnFailure(comm, true, [&] { writeCheckpoint(checkpointPartPath(dir_, scene_.name, s.frame, comm.rank()), info, s); });
     // The set is whole: what else this frame had (a whole checkpoint, parts of a larger set) and the older
     // sets beyond those kept go.
