@@ -97,6 +97,23 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
     state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, fastest);
 }
 
+void Simulation::emitPart(const Emitter& e) {
+    if (!comm_->distributed() && e.total != (long long)e.positions.size())
+        throw std::logic_error("emitPart: a part of a set is emitted on ranks only, after distribute()");
+    // What one process computes from the whole set: the fastest particle, whether the species has any.
+    float fastest = e.positions.empty() ? 0.0f : e.velocity.norm();
+    for (const Vec3f& u : e.velocities) fastest = std::max(fastest, (e.velocity + u).norm());
+    fastest = comm_->max(fastest);
+    if (e.total > 0) populated_.at(std::size_t(e.species)) = 1;
+    std::vector<int32_t> ids(e.positions.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = int32_t(state_.nextId + e.first + (long long)i);
+    state_.nextId += int32_t(e.total);
+    const std::size_t before = particlesOf(state_.species.at(std::size_t(e.species))).size();
+    appendParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes, ids);
+    state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, fastest);
+    if (partitioned_) sendEmittedToOwners(e.species, before);
+}
+
 void Simulation::appendParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
                                  const std::vector<Vec3f>& perParticle, const std::vector<float>& masses,
                                  const std::vector<float>& volumes, const std::vector<int32_t>& ids) {
@@ -161,7 +178,8 @@ void Simulation::emitDue() {
     state_.emittedFrame = state_.frame;
     for (Emitter& e : emitters_) {
         if (!e.emitsAt(state_.frame)) continue;
-        addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
+        if (e.holdsPart()) emitPart(e);
+        else addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
         // Emitted for the last time: its samples (24 bytes a particle and more, on every rank) are not needed again.
         if (state_.frame == e.lastEmission()) {
             std::vector<Vec3d>().swap(e.positions);
@@ -820,10 +838,11 @@ std::vector<std::pair<Vec3i, long long>> Simulation::particlesPerLeaf() const {
     return state_.species.size() == 1 ? all : mergeCounts(std::move(all));
 }
 
-std::vector<std::pair<Vec3i, long long>> Simulation::allParticlesPerLeaf() const {
-    // A leaf's particles can sit on several ranks (until they migrate, or as checkpoint parts left them).
+std::vector<std::pair<Vec3i, long long>> Simulation::mergedOverRanks(const std::vector<std::pair<Vec3i, long long>>& mine) const {
+    // A leaf's particles can sit on several ranks (until they migrate, as checkpoint parts left them, or as
+    // the ranks' parts of a set fall).
     Bytes b;
-    for (const auto& [c, n] : particlesPerLeaf()) {
+    for (const auto& [c, n] : mine) {
         for (int a = 0; a < 3; ++a) put(b, int32_t(c[a]));
         put(b, n);
     }
@@ -865,17 +884,20 @@ void Simulation::distribute(const Comm& comm) {
     // Every rank holds every particle here (or its share: then the counts are every rank's, merged), and the
     // same emitters, so each computes the same cut: from the particles, and from the sets about to be emitted
     // at this frame. Called before the first emission, no rank ever holds the whole scene's particles.
-    std::vector<std::pair<Vec3i, long long>> counts = holdsShare_ ? allParticlesPerLeaf() : particlesPerLeaf();
+    // Sets sampled in parts (each rank holding its own) are counted over every rank.
+    std::vector<std::pair<Vec3i, long long>> counts = particlesPerLeaf();
+    bool parts = holdsShare_;
     if (state_.emittedFrame != state_.frame) {
         const auto leafOf = [&](const Vec3d& x) { return particleLeaf(x); };
         for (const Emitter& e : emitters_)
             if (e.emitsAt(state_.frame)) {
                 const auto c = countPerLeaf(e.positions, leafOf);
                 counts.insert(counts.end(), c.begin(), c.end());
+                parts = parts || e.holdsPart();
             }
         counts = mergeCounts(std::move(counts));
     }
-    cutLeaves(counts);
+    cutLeaves(parts ? mergedOverRanks(counts) : counts);
     partitioned_ = true;
     if (holdsShare_) {
         // Each rank read some parts: the particles go to their leaves' owners, and every rank learns which
@@ -939,6 +961,45 @@ void Simulation::migrateParticles() {
         ByteReader reader{in[std::size_t(r)]};
         for (AnySpecies& s : state_.species) std::visit([&](auto& sp) { unpackAppend(sp, reader); }, s);
     }
+}
+
+void Simulation::sendEmittedToOwners(int s, std::size_t from) {
+    // Only the particles from `from` on move: those before (binned at the last substep) keep their places.
+    const int R = comm_->size(), me = comm_->rank();
+    std::vector<Bytes> out(static_cast<std::size_t>(R));
+    AnySpecies& species = state_.species.at(std::size_t(s));
+    std::visit(
+        [&](auto& sp) {
+            std::vector<int> owner(sp.p.size() - from);
+            std::vector<std::vector<uint32_t>> leaving(static_cast<std::size_t>(R));
+            for (std::size_t i = from; i < sp.p.size(); ++i) {
+                owner[i - from] = ownerOf(particleLeaf(sp.p.x[i]));
+                if (owner[i - from] != me) leaving[std::size_t(owner[i - from])].push_back(uint32_t(i));
+            }
+            for (int r = 0; r < R; ++r)
+                if (!leaving[std::size_t(r)].empty()) pack(sp, leaving[std::size_t(r)], out[std::size_t(r)]);
+            keepWhere(sp, [&](std::size_t i) { return i < from || owner[i - from] == me; });
+        },
+        species);
+    const std::vector<Bytes> in = comm_->exchange(out);
+    std::visit(
+        [&](auto& sp) {
+            for (int r = 0; r < R; ++r) {
+                if (r == me || in[std::size_t(r)].empty()) continue;
+                ByteReader reader{in[std::size_t(r)]};
+                unpackAppend(sp, reader);
+            }
+            // The newcomers in id order, as one process holds a set's particles after emitting it.
+            std::vector<uint32_t> order(sp.p.size() - from);
+            for (std::size_t i = 0; i < order.size(); ++i) order[i] = uint32_t(from + i);
+            std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return sp.p.id[a] < sp.p.id[b]; });
+            sp.forEachArray([&](auto& arr) {
+                std::decay_t<decltype(arr)> sorted(order.size());
+                for (std::size_t k = 0; k < order.size(); ++k) sorted[k] = arr[order[k]];
+                std::copy(sorted.begin(), sorted.end(), arr.begin() + std::ptrdiff_t(from));
+            });
+        },
+        species);
 }
 
 void Simulation::exchangeReachedLeaves(SparseGrid& grid, RankLeaves& leaves) {

@@ -89,6 +89,11 @@ struct Emitter {
         return startFrame + (durationFrames - 1) / (pauseFrames + 1) * (pauseFrames + 1);
     }
     bool released = false;  ///< its particles' arrays were freed after its last emission
+    /// On ranks a set's samples are shared out: `positions` (and the arrays beside it) are then samples
+    /// [first, first + positions.size()) of the set's `total`, and each rank emits its part (the particles
+    /// then move to their leaves' owners). total < 0: this emitter holds the whole set.
+    long long first = 0, total = -1;
+    bool holdsPart() const { return total >= 0; }
 };
 
 /// Wall seconds spent in each phase of the substeps since the last reset (bench/ reports their shares).
@@ -226,7 +231,14 @@ private:
     void cutLeaves(const std::vector<std::pair<Vec3i, long long>>& leafCounts);
     std::vector<std::pair<Vec3i, long long>> particlesPerLeaf() const;
     /// Every rank's particlesPerLeaf, merged (the same on every rank). Collective.
-    std::vector<std::pair<Vec3i, long long>> allParticlesPerLeaf() const;
+    std::vector<std::pair<Vec3i, long long>> allParticlesPerLeaf() const { return mergedOverRanks(particlesPerLeaf()); }
+    /// Every rank's leaf counts added up, in Morton order (the same on every rank). Collective.
+    std::vector<std::pair<Vec3i, long long>> mergedOverRanks(const std::vector<std::pair<Vec3i, long long>>& mine) const;
+    /// Emits a rank's part of a set (Emitter::holdsPart): ids as one process gives them, particles kept here
+    /// until the next substep sends them to their owners. Collective.
+    void emitPart(const Emitter& e);
+    /// Sends the particles of species s from index `from` on to their leaves' owners. Collective.
+    void sendEmittedToOwners(int s, std::size_t from);
     void rebalanceIfNeeded();
     void migrateParticles();
     void exchangeReachedLeaves(SparseGrid& grid, RankLeaves& leaves);

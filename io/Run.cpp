@@ -122,7 +122,7 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
             events_.warning("took over the lock of " + dir_ + " from a run that is gone (" + lock_->takenOverFrom() + ")");
         removeStaleTemporaries();
     });
-    guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_); });
+    guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_, Comm::world()); });
     layout_ = speciesLayout(scene_);
     identity_ = sceneIdentity(scene_.resolvedJson);
     hash_ = sceneHash(identity_);

@@ -1,9 +1,17 @@
 #include "io/Sampling.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <unordered_map>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "sparse/LeafGeometry.h"
 
 namespace mpm {
 
@@ -26,92 +34,252 @@ std::vector<Vec3d> jitteredGrid(const Shape& shape, double spacing, double jitte
     return out;
 }
 
-/// Bridson's growth from the active samples until none can place a new one.
-template <class Shape, class CellOf, class ClearOf, class Accept>
-void grow(const Shape& shape, const std::vector<Vec3d>& samples, std::vector<int32_t>& active, const Vec3d& lo, const Vec3d& hi, double r,
-          std::mt19937& rng, CellOf&& cellOf, ClearOf&& clearOf, Accept&& accept) {
-    std::uniform_real_distribution<double> u01(0.0, 1.0);
-    while (!active.empty()) {
-        const std::size_t pick = std::size_t(u01(rng) * active.size()) % active.size();
-        const Vec3d centre = samples[active[pick]];
-        bool found = false;
-        for (int a = 0; a < kPoissonAttempts && !found; ++a) {
-            // Uniform in the spherical shell [r, 2r).
-            Vec3d dir(u01(rng) * 2 - 1, u01(rng) * 2 - 1, u01(rng) * 2 - 1);
-            const double len = dir.norm();
-            if (len < 1e-9 || len > 1.0) continue;
-            const double rad = r * std::cbrt(1.0 + 7.0 * u01(rng));
-            const Vec3d x = centre + dir / len * rad;
-            if ((x.array() < lo.array()).any() || (x.array() >= hi.array()).any() || !shape.contains(x)) continue;
-            if (clearOf(x)) {
-                accept(x);
-                found = true;
+/// Bridson's growth (2007) run tile by tile so that any region can be sampled alone and give the points
+/// the whole shape would have there (Wei 2008, "Parallel Poisson disk sampling", phase groups of tiles).
+/// The shape's bounds are covered by tiles of kTileCells^3 background cells (cell r / sqrt 3, one sample at
+/// most). Tiles are filled in 8 phases by the parity of their coordinates: neighbouring tiles differ in phase,
+/// and two tiles of one phase are a tile apart (> r), so no two of them compete for a point. A tile grows
+/// from the samples of its earlier-phase neighbours, then seeds the cells 2 r clear of every point (a point
+/// drawn in the cell, then its centre) and grows again, all with its own generator seeded by the set's seed
+/// and the tile's coordinate. A tile's points thus depend only on tiles within 7 of it (phase 7 reads phase
+/// 6, which reads phase 5, ...), and sampling a range of tiles fills that range grown by 7 - phase tiles for
+/// each phase.
+template <class Shape>
+class PoissonTilesIn {
+public:
+    PoissonTilesIn(const Shape& shape, double r, unsigned seed) : shape_(shape), r_(r), cell_(r / std::sqrt(3.0)), seed_(seed) {
+        shape.bounds(lo_, hi_);
+        const Vec3d span = ((hi_ - lo_) / (cell_ * kTileCells)).array().ceil().max(1.0);
+        if (span.maxCoeff() > double(kMaxTiles))
+            throw std::length_error("Poisson-disk sampling: the shape is " + std::to_string(span.maxCoeff()) +
+                                    " tiles of 4.6 minimum distances long, more than " + std::to_string(kMaxTiles));
+        tiles_ = span.cast<int>();
+    }
+    Vec3i tileCounts() const { return tiles_; }
+
+    /// The points of `wanted` (tile coordinates in [0, tileCounts())), tile after tile in that order.
+    std::vector<Vec3d> sample(const std::vector<Vec3i>& wanted) {
+        // Which tiles each phase must fill: those of that phase within 7 - phase tiles of a wanted one.
+        std::vector<std::vector<Vec3i>> fill(kPhases);
+        const long long all = (long long)tiles_[0] * tiles_[1] * tiles_[2];
+        if ((long long)wanted.size() == all) {
+            for (const Vec3i& t : wanted) fill[std::size_t(phaseOf(t))].push_back(t);
+        } else {
+            std::unordered_map<uint64_t, int> reach;  // tile -> how far it lies from the wanted ones (<= 7)
+            std::vector<Vec3i> front = wanted;
+            for (const Vec3i& t : wanted) reach.emplace(key(t), 0);
+            for (int d = 1; d < kPhases && !front.empty(); ++d) {
+                std::vector<Vec3i> next;
+                for (const Vec3i& t : front)
+                    for (int i = -1; i <= 1; ++i)
+                        for (int j = -1; j <= 1; ++j)
+                            for (int k = -1; k <= 1; ++k) {
+                                const Vec3i n = t + Vec3i(i, j, k);
+                                if ((n.array() < 0).any() || (n.array() >= tiles_.array()).any()) continue;
+                                if (reach.emplace(key(n), d).second) next.push_back(n);
+                            }
+                front = std::move(next);
             }
+            for (const auto& [k, d] : reach) {
+                const Vec3i t = tileOfKey(k);
+                if (d <= kPhases - 1 - phaseOf(t)) fill[std::size_t(phaseOf(t))].push_back(t);
+            }
+            // The map's order is the library's: fill each phase in a fixed order (the result does not depend
+            // on it, the tiles of a phase being independent, but the work then always runs the same way).
+            for (auto& f : fill) std::sort(f.begin(), f.end(), [](const Vec3i& a, const Vec3i& b) { return mortonLess(a, b); });
         }
-        if (!found) {
-            active[pick] = active.back();
-            active.pop_back();
+        // The tiles of a phase never read one another: they fill in parallel. Each reads its neighbours of
+        // earlier phases, filled before, and writes its own entry, made before the phase starts.
+        for (int p = 0; p < kPhases; ++p) {
+            const std::vector<Vec3i>& phase = fill[std::size_t(p)];
+            for (const Vec3i& t : phase) done_[key(t)];
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, phase.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t i = r.begin(); i < r.end(); ++i) fillTile(phase[i]);
+            });
         }
+        std::vector<Vec3d> out;
+        for (const Vec3i& t : wanted) {
+            const auto it = done_.find(key(t));
+            if (it != done_.end()) out.insert(out.end(), it->second.pts.begin(), it->second.pts.end());
+        }
+        return out;
     }
+
+private:
+    static constexpr int kTileCells = 8;  ///< background cells along a tile's edge (a tile is 4.6 r wide)
+    static constexpr int kMaxTiles = (1 << 20) - 2;  ///< along an axis: what a key's 21 bits hold
+    static constexpr int kTileShift = 3;  ///< log2(kTileCells)
+    static constexpr int kPhases = 8;     ///< tile parities in 3D
+    static constexpr double kPieceSeedSpacing = 1.5;  ///< in r: a file's thin pieces are seeded this clear of points
+    struct Tile {
+        std::vector<Vec3d> pts;
+        std::array<int16_t, kTileCells * kTileCells * kTileCells> cell;  ///< index in pts of the cell's point, or -1
+    };
+
+    static int phaseOf(const Vec3i& t) { return (t[0] & 1) | (t[1] & 1) << 1 | (t[2] & 1) << 2; }
+    /// Tiles lie in [-1, 2^20 - 2] along each axis (a tile is at least r wide: 2^20 of them is far beyond memory).
+    static uint64_t key(const Vec3i& t) {
+        return uint64_t(t[0] + 1) << 42 | uint64_t(t[1] + 1) << 21 | uint64_t(t[2] + 1);
+    }
+    static Vec3i tileOfKey(uint64_t k) {
+        constexpr uint64_t m = (uint64_t(1) << 21) - 1;
+        return Vec3i(int(k >> 42 & m) - 1, int(k >> 21 & m) - 1, int(k & m) - 1);
+    }
+    static int localOf(const Vec3i& c) {
+        constexpr int m = kTileCells - 1;
+        return ((c[0] & m) * kTileCells + (c[1] & m)) * kTileCells + (c[2] & m);
+    }
+    Vec3i cellOf(const Vec3d& x) const { return ((x - lo_) / cell_).array().floor().cast<int>(); }
+
+    void fillTile(const Vec3i& t) {
+        Tile& me = done_.find(key(t))->second;
+        me.cell.fill(-1);
+        // The 27 tiles around (earlier phases filled, later ones absent): a candidate's 5^3 cells lie in them.
+        const Tile* around[27];
+        for (int i = 0; i < 27; ++i) {
+            const auto it = done_.find(key(t + Vec3i(i / 9 - 1, i / 3 % 3 - 1, i % 3 - 1)));
+            around[i] = it == done_.end() ? nullptr : &it->second;
+        }
+        // No point nearer than `spacing` (r, or 2 r for a seed; both within the 27 tiles).
+        auto clearWithin = [&](const Vec3d& x, double spacing) {
+            const Vec3i c = cellOf(x);
+            const int w = int(std::ceil(spacing / cell_));
+            for (int i = c[0] - w; i <= c[0] + w; ++i)
+                for (int j = c[1] - w; j <= c[1] + w; ++j)
+                    for (int k = c[2] - w; k <= c[2] + w; ++k) {
+                        const Vec3i n(i, j, k);
+                        const Vec3i d = Vec3i(i >> kTileShift, j >> kTileShift, k >> kTileShift) - t + Vec3i::Ones();
+                        const Tile* tile = around[(d[0] * 3 + d[1]) * 3 + d[2]];
+                        if (!tile) continue;
+                        const int s = tile->cell[std::size_t(localOf(n))];
+                        if (s >= 0 && (tile->pts[std::size_t(s)] - x).squaredNorm() < spacing * spacing) return false;
+                    }
+            return true;
+        };
+        auto clearOf = [&](const Vec3d& x) { return clearWithin(x, r_); };
+        // A point belongs to this tile when its cell does (the test the lookups above make, rounding included).
+        // A file's shape is read through a sampler of this task's own.
+        const auto shape = [&] {
+            if constexpr (requires { shape_.withOwnSampler(); }) return shape_.withOwnSampler();
+            else return shape_;
+        }();
+        auto mine = [&](const Vec3d& x) {
+            if ((x.array() < lo_.array()).any() || (x.array() >= hi_.array()).any()) return false;
+            const Vec3i c = cellOf(x);
+            return Vec3i(c[0] >> kTileShift, c[1] >> kTileShift, c[2] >> kTileShift) == t && shape.contains(x);
+        };
+        std::mt19937 rng(tileSeed(t));
+        std::uniform_real_distribution<double> u01(0.0, 1.0);
+        std::vector<Vec3d> active;
+        auto accept = [&](const Vec3d& x) {
+            me.cell[std::size_t(localOf(cellOf(x)))] = int16_t(me.pts.size());
+            me.pts.push_back(x);
+            active.push_back(x);
+        };
+        auto grow = [&] {
+            while (!active.empty()) {
+                const std::size_t pick = std::size_t(u01(rng) * double(active.size())) % active.size();
+                const Vec3d centre = active[pick];
+                bool found = false;
+                for (int a = 0; a < kPoissonAttempts && !found; ++a) {
+                    // Uniform in the spherical shell [r, 2r).
+                    Vec3d dir(u01(rng) * 2 - 1, u01(rng) * 2 - 1, u01(rng) * 2 - 1);
+                    const double len = dir.norm();
+                    if (len < 1e-9 || len > 1.0) continue;
+                    const Vec3d x = centre + dir / len * (r_ * std::cbrt(1.0 + 7.0 * u01(rng)));
+                    if (mine(x) && clearOf(x)) {
+                        accept(x);
+                        found = true;
+                    }
+                }
+                if (!found) {
+                    active[pick] = active.back();
+                    active.pop_back();
+                }
+            }
+        };
+        // Grow from the neighbours' points that can reach into this tile (within 2 r of it).
+        const Vec3d boxLo = lo_ + t.cast<double>() * (cell_ * kTileCells), boxHi = boxLo + Vec3d::Constant(cell_ * kTileCells);
+        for (const Tile* tile : around)
+            if (tile && tile != &me)
+                for (const Vec3d& x : tile->pts) {
+                    const Vec3d gap = (boxLo - x).cwiseMax(x - boxHi).cwiseMax(0.0);
+                    if (gap.squaredNorm() < 4.0 * r_ * r_) active.push_back(x);
+                }
+        grow();
+        // Then every cell 2 r from any point seeds (a random point in it, else its centre) and grows: the first
+        // points of a tile no neighbour reached, and pieces of the shape the growth did not reach. (Seeding
+        // wherever r allows would fill the growth's gaps too, denser along the tiles' faces.)
+        auto seedFreeCells = [&](double spacing, bool random) {
+            for (int i = 0; i < kTileCells; ++i)
+                for (int j = 0; j < kTileCells; ++j)
+                    for (int k = 0; k < kTileCells; ++k) {
+                        const Vec3i c = t * kTileCells + Vec3i(i, j, k);
+                        if (me.cell[std::size_t(localOf(c))] >= 0) continue;
+                        const Vec3d corner = lo_ + c.cast<double>() * cell_;
+                        const Vec3d centre = corner + Vec3d::Constant(0.5 * cell_);
+                        const Vec3d tries[2] = {random ? Vec3d(corner + cell_ * Vec3d(u01(rng), u01(rng), u01(rng))) : centre, centre};
+                        for (const Vec3d& x : tries)
+                            if (cellOf(x) == c && mine(x) && clearWithin(x, spacing)) {
+                                accept(x);
+                                grow();
+                                break;
+                            }
+                    }
+        };
+        seedFreeCells(2.0 * r_, true);
+        // A file's shape may hold thin pieces near others: cell centres 1.5 r clear of all points seed too
+        // (r would fill the growth's gaps as well, 7% denser than the other shapes).
+        if constexpr (requires { Shape::kMayBeDisconnected; }) seedFreeCells(kPieceSeedSpacing * r_, false);
+    }
+
+    /// The tile's own generator: the set's seed and the tile's coordinate mixed (splitmix64's finaliser).
+    unsigned tileSeed(const Vec3i& t) const {
+        uint64_t z = key(t) * 0x9e3779b97f4a7c15ull + seed_;
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+        return unsigned(z ^ (z >> 31));
+    }
+
+    const Shape& shape_;
+    double r_, cell_;
+    unsigned seed_;
+    Vec3d lo_, hi_;
+    Vec3i tiles_;
+    std::unordered_map<uint64_t, Tile> done_;
+};
+
+/// Every tile of the shape's bounds, in Morton order: the order of a set's samples.
+inline std::vector<Vec3i> tilesInOrder(const Vec3i& n) {
+    std::vector<Vec3i> out;
+    out.reserve(std::size_t(n[0]) * std::size_t(n[1]) * std::size_t(n[2]));
+    for (int i = 0; i < n[0]; ++i)
+        for (int j = 0; j < n[1]; ++j)
+            for (int k = 0; k < n[2]; ++k) out.emplace_back(i, j, k);
+    std::sort(out.begin(), out.end(), [](const Vec3i& a, const Vec3i& b) { return mortonLess(a, b); });
+    return out;
+}
+
+/// Tiles [part / parts, (part + 1) / parts) of the shape's tiles in Morton order: the part's share.
+template <class Shape>
+std::vector<Vec3d> poissonDiskIn(const Shape& shape, double r, unsigned seed, SamplePart part) {
+    PoissonTilesIn<Shape> tiles(shape, r, seed);
+    std::vector<Vec3i> order = tilesInOrder(tiles.tileCounts());
+    const auto cut = [&](int k) { return (long long)(order.size() * (unsigned long long)k / (unsigned long long)part.parts); };
+    if (part.parts > 1) order = std::vector<Vec3i>(order.begin() + cut(part.part), order.begin() + cut(part.part + 1));
+    return tiles.sample(order);
+}
+
+/// Samples [part / parts, (part + 1) / parts) of a sampling made whole.
+std::vector<Vec3d> shareOf(std::vector<Vec3d> all, SamplePart part) {
+    if (part.parts <= 1) return all;
+    const auto cut = [&](int k) { return std::ptrdiff_t(all.size() * (unsigned long long)k / (unsigned long long)part.parts); };
+    return std::vector<Vec3d>(all.begin() + cut(part.part), all.begin() + cut(part.part + 1));
 }
 
 template <class Shape>
-std::vector<Vec3d> poissonDiskIn(const Shape& shape, double r, unsigned seed) {
-    Vec3d lo, hi;
-    shape.bounds(lo, hi);
-    // Background grid of cell r / sqrt(3): each cell holds at most one sample.
-    const double cell = r / std::sqrt(3.0);
-    const Vec3i dims = ((hi - lo) / cell).array().ceil().cast<int>().max(1);
-    const long long cells = (long long)dims[0] * dims[1] * dims[2];
-    std::vector<int32_t> grid(std::size_t(cells), -1);
-    auto cellOf = [&](const Vec3d& x) {
-        return ((x - lo) / cell).array().floor().cast<int>().min(dims.array() - 1).max(0).matrix().eval();
-    };
-    auto flat = [&](const Vec3i& c) { return (std::size_t(c[0]) * dims[1] + c[1]) * dims[2] + c[2]; };
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u01(0.0, 1.0);
-    std::vector<Vec3d> samples, inside;
-    std::vector<int32_t> active;
-    auto accept = [&](const Vec3d& x) {
-        grid[flat(cellOf(x))] = int32_t(samples.size());
-        active.push_back(int32_t(samples.size()));
-        samples.push_back(x);
-    };
-    // Seeds: the first point inside the shape from a few random tries.
-    for (int tries = 0; tries < 1000 && samples.empty(); ++tries) {
-        const Vec3d x = lo + Vec3d(u01(rng), u01(rng), u01(rng)).cwiseProduct(hi - lo);
-        if (shape.contains(x)) accept(x);
-    }
-    auto clearOf = [&](const Vec3d& x) {
-        const Vec3i c = cellOf(x);
-        for (int i = std::max(0, c[0] - 2); i <= std::min(dims[0] - 1, c[0] + 2); ++i)
-            for (int j = std::max(0, c[1] - 2); j <= std::min(dims[1] - 1, c[1] + 2); ++j)
-                for (int k = std::max(0, c[2] - 2); k <= std::min(dims[2] - 1, c[2] + 2); ++k) {
-                    const int32_t s = grid[flat(Vec3i(i, j, k))];
-                    if (s >= 0 && (samples[s] - x).squaredNorm() < r * r) return false;
-                }
-        return true;
-    };
-    grow(shape, samples, active, lo, hi, r, rng, cellOf, clearOf, accept);
-    // A file's shape may come in several pieces: seed each piece the growth did not reach, from the centres of
-    // the background cells, and grow again. (Analytic shapes are connected; their samples stay as they were.)
-    if constexpr (requires { Shape::kMayBeDisconnected; }) {
-        for (int i = 0; i < dims[0]; ++i)
-            for (int j = 0; j < dims[1]; ++j)
-                for (int k = 0; k < dims[2]; ++k) {
-                    if (grid[flat(Vec3i(i, j, k))] >= 0) continue;
-                    const Vec3d x = lo + (Vec3d(i, j, k) + Vec3d::Constant(0.5)) * cell;
-                    if (!shape.contains(x) || !clearOf(x)) continue;
-                    accept(x);
-                    grow(shape, samples, active, lo, hi, r, rng, cellOf, clearOf, accept);
-                }
-    }
-    return samples;
-}
-
-template <class Shape>
-std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCell, long long count, Sampling method,
-                            unsigned seed) {
+std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCell, long long count, Sampling method, unsigned seed,
+                            SamplePart part) {
     const double perVolume = count > 0 ? double(count) / shape.volume() : particlesPerCell / (dx * dx * dx);
     std::vector<Vec3d> pts;
     if (method != Sampling::Poisson) {
@@ -122,26 +290,28 @@ std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCe
         while (count > 0 && (long long)pts.size() < count) pts = jitteredGrid(shape, spacing *= 0.97, jitter, seed);
     } else {
         double r = std::cbrt(1.0 / (kPoissonPacking * perVolume));
-        pts = poissonDiskIn(shape, r, seed);
-        while (count > 0 && (long long)pts.size() < count) pts = poissonDiskIn(shape, r *= 0.95, seed);
+        // Only a density-given Poisson set samples its part alone; an exact count picks from the whole.
+        if (count <= 0) return poissonDiskIn(shape, r, seed, part);
+        pts = poissonDiskIn(shape, r, seed, SamplePart{});
+        while ((long long)pts.size() < count) pts = poissonDiskIn(shape, r *= 0.95, seed, SamplePart{});
     }
     if (count > 0 && (long long)pts.size() > count) {
         std::mt19937 rng(seed ^ 0x9e3779b9u);
         std::shuffle(pts.begin(), pts.end(), rng);
         pts.resize(std::size_t(count));
     }
-    return pts;
+    return shareOf(std::move(pts), part);
 }
 
 }  // namespace
 
-std::vector<Vec3d> poissonDisk(const SetRegion& shape, double r, unsigned seed) {
-    return std::visit([&](const auto& s) { return poissonDiskIn(s, r, seed); }, shape);
+std::vector<Vec3d> poissonDisk(const SetRegion& shape, double r, unsigned seed, SamplePart part) {
+    return std::visit([&](const auto& s) { return poissonDiskIn(s, r, seed, part); }, shape);
 }
 
 std::vector<Vec3d> sampleShape(const SetRegion& shape, double dx, double particlesPerCell, long long count, Sampling method,
-                               unsigned seed) {
-    return std::visit([&](const auto& s) { return sampleIn(s, dx, particlesPerCell, count, method, seed); }, shape);
+                               unsigned seed, SamplePart part) {
+    return std::visit([&](const auto& s) { return sampleIn(s, dx, particlesPerCell, count, method, seed, part); }, shape);
 }
 
 double shapeVolume(const SetRegion& shape) {

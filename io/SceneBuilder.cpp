@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <numeric>
+#include <stdexcept>
 
 #include "core/Colliders.h"
+#include "core/ExactSum.h"
 #include "core/LevelSetGeometry.h"
 #include "core/LevelSetSequence.h"
 #include "io/LevelSets.h"
@@ -183,16 +186,31 @@ SetSamples pointCloudSet(const SceneDesc& scene, std::size_t i, const PointsShap
 }  // namespace
 
 /// The set's shape sampled: positions, a point cloud's velocities, the volume.
-static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i) {
+static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i, SamplePart part) {
     const ParticleSetDesc& d = scene.sets[i];
-    if (const auto* points = std::get_if<PointsShape>(&d.shape)) return pointCloudSet(scene, i, *points);
+    if (const auto* points = std::get_if<PointsShape>(&d.shape)) {
+        // A file is read whole; each part keeps its range of points.
+        SetSamples all = pointCloudSet(scene, i, *points);
+        if (part.parts <= 1) return all;
+        const std::size_t n = all.positions.size();
+        const std::size_t begin = n * std::size_t(part.part) / std::size_t(part.parts), end = n * std::size_t(part.part + 1) / std::size_t(part.parts);
+        auto cut = [&](auto& arr) {
+            if (!arr.empty()) arr = std::decay_t<decltype(arr)>(arr.begin() + std::ptrdiff_t(begin), arr.begin() + std::ptrdiff_t(end));
+        };
+        cut(all.positions), cut(all.velocities), cut(all.volumes), cut(all.masses);
+        return all;
+    }
     if (d.continuous || isOutlet(d.shape))
         throw std::logic_error("sampleSetShape: a continuous source is a stream (streamOf)");
     const SetRegionIn r = regionOf(scene, i);
     const double s = r.placement.scale;
     // Sampled where the file's cells are dx / scale, then placed: the same particles wherever the asset is put.
     SetSamples out;
-    out.positions = sampleShape(r.region, scene.settings.dx / s, d.particlesPerCell, d.count, d.sampling, d.seed);
+    try {
+        out.positions = sampleShape(r.region, scene.settings.dx / s, d.particlesPerCell, d.count, d.sampling, d.seed, part);
+    } catch (const std::length_error& e) {
+        throw SceneError(scene.file + ": /sets/" + std::to_string(i) + "/shape: " + e.what() + "; split the set into shorter ones");
+    }
     if (!r.placement.identity())
         for (Vec3d& x : out.positions) x = r.placement.apply(x);
     out.volume = shapeVolume(r.region) * s * s * s;
@@ -200,7 +218,7 @@ static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i) {
 }
 
 /// The set's initial velocities beyond its constant one: a rigid spin about the pivot, and a VDB field.
-static void addInitialVelocities(const SceneDesc& scene, std::size_t i, SetSamples& out) {
+static void addInitialVelocities(const SceneDesc& scene, std::size_t i, SetSamples& out, const Comm& comm) {
     const ParticleSetDesc& d = scene.sets[i];
     if (d.angularVelocity.isZero() && d.velocityFile.empty()) return;
     const std::size_t n = out.positions.size();
@@ -208,9 +226,15 @@ static void addInitialVelocities(const SceneDesc& scene, std::size_t i, SetSampl
     if (!d.angularVelocity.isZero()) {
         Vec3d pivot = d.pivot;
         if (!d.pivotGiven) {
-            pivot = Vec3d::Zero();
-            for (const Vec3d& x : out.positions) pivot += x;
-            pivot /= double(std::max<std::size_t>(n, 1));
+            // The centre of every rank's samples: exact sums, the same bits however the set is split.
+            ExactSum sum[3];
+            for (const Vec3d& x : out.positions)
+                for (int a = 0; a < 3; ++a) sum[a].add(x[a]);
+            const long long all = comm.sum((long long)n);
+            for (int a = 0; a < 3; ++a) {
+                comm.sum(sum[a]);
+                pivot[a] = sum[a].value() / double(std::max(all, 1LL));
+            }
         }
         for (std::size_t p = 0; p < n; ++p) out.velocities[p] += d.angularVelocity.cross(out.positions[p] - pivot).cast<float>();
     }
@@ -226,9 +250,9 @@ static void addInitialVelocities(const SceneDesc& scene, std::size_t i, SetSampl
     }
 }
 
-SetSamples sampleSet(const SceneDesc& scene, std::size_t i) {
-    SetSamples out = sampleSetShape(scene, i);
-    addInitialVelocities(scene, i, out);
+SetSamples sampleSet(const SceneDesc& scene, std::size_t i, const Comm& comm) {
+    SetSamples out = sampleSetShape(scene, i, SamplePart{comm.rank(), comm.size()});
+    addInitialVelocities(scene, i, out, comm);
     return out;
 }
 
@@ -381,7 +405,7 @@ SpeciesLayout speciesLayout(const SceneDesc& scene) {
     return out;
 }
 
-std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene) {
+std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm) {
     auto sim = std::make_unique<Simulation>(scene.settings);
     const SpeciesLayout layout = speciesLayout(scene);
     // Bodies, numbered in order of first appearance: a set's `body` name, or else its own name.
@@ -418,14 +442,24 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene) {
             sim->addEmitter(std::move(e));
             continue;
         }
-        SetSamples samples = sampleSet(scene, i);
+        SetSamples samples = sampleSet(scene, i, comm);
         e.positions = std::move(samples.positions);
-        if (e.positions.empty())
+        long long total = (long long)e.positions.size();
+        if (comm.distributed()) {
+            // This rank's part: where it starts among the set's samples, and how many there are in all.
+            std::vector<long long> sizes;
+            Bytes mine;
+            put(mine, total);
+            for (const Bytes& b : comm.allGather(mine)) sizes.push_back(ByteReader{b}.get<long long>());
+            e.first = std::accumulate(sizes.begin(), sizes.begin() + comm.rank(), 0LL);
+            e.total = total = std::accumulate(sizes.begin(), sizes.end(), 0LL);
+        }
+        if (total == 0)
             throw SceneError(scene.file + ": /sets/" + std::to_string(i) +
                              "/shape: no particle fits in the shape at dx = " + std::to_string(scene.settings.dx));
         e.velocity = d.velocity;
         e.velocities = std::move(samples.velocities);
-        e.volume = float(samples.volume / double(e.positions.size()));
+        e.volume = float(samples.volume / double(total));
         const float density = std::visit([](const auto& p) { return p.density; }, params);
         e.mass = float(e.volume * density * d.massScale);
         e.volumes = std::move(samples.volumes);

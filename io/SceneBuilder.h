@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/Comm.h"
 #include "io/SceneDesc.h"
 
 namespace mpm {
@@ -30,7 +31,10 @@ struct SetSamples {
     std::vector<float> volumes;     ///< per particle, a point cloud's with radii; empty: volume shared evenly
     std::vector<float> masses;      ///< per particle, a point cloud's with masses or densities; empty: density x volume
 };
-SetSamples sampleSet(const SceneDesc& scene, std::size_t i);
+/// With several ranks each gets its part of the samples (in rank order, the whole set's order; `volume`
+/// stays the whole set's): a Poisson-disk set given by its density samples only its part's tiles.
+/// Collective on `comm`.
+SetSamples sampleSet(const SceneDesc& scene, std::size_t i, const Comm& comm = Comm::single());
 
 /// A continuous set's stream: the layers that enter through its disc (throws SceneError for a set that cannot
 /// be one: not a disc, no velocity out through it).
@@ -45,7 +49,9 @@ void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo,
 inline constexpr long long kFewParticles = 100;
 std::vector<std::string> sceneWarnings(const SceneDesc& scene);
 
-/// Builds the simulation the scene describes. Throws SceneError when a set's shape holds no particle.
-std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene);
+/// Builds the simulation the scene describes. Throws SceneError when a set's shape holds no particle. On
+/// several ranks each emitter holds its rank's part of the set's samples (Simulation::distribute then cuts
+/// the leaves from every rank's counts); collective on `comm`.
+std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm = Comm::single());
 
 }  // namespace mpm

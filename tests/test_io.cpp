@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <unordered_map>
 
 #include "io/AtomicFile.h"
 #include "io/PointFile.h"
@@ -114,6 +115,53 @@ TEST(Sampling, PoissonDiskMeetsCountSpacingAndShape) {
     const auto grid = sampleShape(ball, 0.02, 8.0, 777, Sampling::Grid, 3);
     EXPECT_EQ(grid.size(), 777u);
     for (const Vec3d& p : grid) EXPECT_TRUE(sphere.contains(p));
+}
+
+TEST(Sampling, PoissonDiskPartsAreTheWholeSamplingCut) {
+    // Each part is sampled alone (a rank's share) and must give the whole sampling's points there, in order:
+    // the tiles' points depend only on tiles within 7 of them, each grown from a seed of its coordinate.
+    Box box;
+    box.min = Vec3d(-0.3, 0.1, 0.2);
+    box.max = Vec3d(0.25, 0.4, 0.5);
+    const SetRegion region = box;
+    const double r = 0.012;
+    const auto whole = poissonDisk(region, r, 11);
+    ASSERT_GT(whole.size(), 10000u);
+    for (int parts : {2, 3, 7}) {
+        std::vector<Vec3d> joined;
+        for (int k = 0; k < parts; ++k) {
+            const auto part = poissonDisk(region, r, 11, SamplePart{k, parts});
+            EXPECT_LT(part.size(), whole.size());
+            joined.insert(joined.end(), part.begin(), part.end());
+        }
+        ASSERT_EQ(joined.size(), whole.size()) << parts << " parts";
+        EXPECT_TRUE(std::equal(joined.begin(), joined.end(), whole.begin())) << parts << " parts";
+    }
+    // Across tile borders the spacing holds too: a spatial hash of cell r finds every pair closer than r.
+    std::unordered_map<long long, std::vector<std::size_t>> cells;
+    auto keyOf = [&](const Vec3i& c) { return ((long long)(c[0] + 1000) * 4096 + (c[1] + 1000)) * 4096 + (c[2] + 1000); };
+    auto cellOf = [&](const Vec3d& x) { return (x / r).array().floor().cast<int>().matrix().eval(); };
+    for (std::size_t i = 0; i < whole.size(); ++i) cells[keyOf(cellOf(whole[i]))].push_back(i);
+    double minDist = 1e9;
+    for (std::size_t i = 0; i < whole.size(); ++i) {
+        const Vec3i c = cellOf(whole[i]);
+        for (int a = -1; a <= 1; ++a)
+            for (int b = -1; b <= 1; ++b)
+                for (int d = -1; d <= 1; ++d) {
+                    const auto it = cells.find(keyOf(c + Vec3i(a, b, d)));
+                    if (it == cells.end()) continue;
+                    for (std::size_t j : it->second)
+                        if (j != i) minDist = std::min(minDist, (whole[i] - whole[j]).norm());
+                }
+    }
+    EXPECT_GE(minDist, r * (1 - 1e-9));
+    // Filled to the borders: the density near the faces (within 2 r) is that of the interior within 10%.
+    std::size_t nearFace = 0;
+    for (const Vec3d& x : whole) nearFace += ((x - box.min).cwiseMin(box.max - x).minCoeff() < 2 * r);
+    const Vec3d e = box.max - box.min, inner = e - Vec3d::Constant(4 * r);
+    const double shellVolume = e.prod() - inner.prod();
+    const double interiorDensity = double(whole.size() - nearFace) / inner.prod();
+    EXPECT_NEAR(double(nearFace) / shellVolume / interiorDensity, 1.0, 0.1);
 }
 
 TEST(Emission, HappensOnTheRightFrames) {
