@@ -54,6 +54,7 @@ public:
             throw std::length_error("Poisson-disk sampling: the shape is " + std::to_string(span.maxCoeff()) +
                                     " tiles of 4.6 minimum distances long, more than " + std::to_string(kMaxTiles));
         tiles_ = span.cast<int>();
+        reachR_ = offsetsWithin(r_), reachSeed_ = offsetsWithin(kSeedSpacing * r_), reachPiece_ = offsetsWithin(kPieceSeedSpacing * r_);
     }
     Vec3i tileCounts() const { return tiles_; }
 
@@ -110,7 +111,26 @@ private:
     static constexpr int kMaxTiles = (1 << 20) - 2;  ///< along an axis: what a key's 21 bits hold
     static constexpr int kTileShift = 3;  ///< log2(kTileCells)
     static constexpr int kPhases = 8;     ///< tile parities in 3D
+    static constexpr double kSeedSpacing = 2.0;       ///< in r: a tile seeds a new growth this clear of points
     static constexpr double kPieceSeedSpacing = 1.5;  ///< in r: a file's thin pieces are seeded this clear of points
+
+    /// Cell offsets whose cells may hold a point nearer than `spacing` to a point of the centre cell, by their
+    /// least distance (cell * |max(|o| - 1, 0)|).
+    std::vector<Vec3i> offsetsWithin(double spacing) const {
+        const int w = int(std::ceil(spacing / cell_));
+        std::vector<std::pair<double, Vec3i>> all;
+        for (int i = -w; i <= w; ++i)
+            for (int j = -w; j <= w; ++j)
+                for (int k = -w; k <= w; ++k) {
+                    const Vec3i o(i, j, k);
+                    const double least = cell_ * (o.cwiseAbs() - Vec3i::Ones()).cwiseMax(0).cast<double>().norm();
+                    if (least < spacing) all.emplace_back(least, o);
+                }
+        std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+        std::vector<Vec3i> out;
+        for (const auto& e : all) out.push_back(e.second);
+        return out;
+    }
     struct Tile {
         std::vector<Vec3d> pts;
         std::array<int16_t, kTileCells * kTileCells * kTileCells> cell;  ///< index in pts of the cell's point, or -1
@@ -140,23 +160,21 @@ private:
             const auto it = done_.find(key(t + Vec3i(i / 9 - 1, i / 3 % 3 - 1, i % 3 - 1)));
             around[i] = it == done_.end() ? nullptr : &it->second;
         }
-        // No point nearer than `spacing` (r, or 2 r for a seed; both within the 27 tiles).
-        auto clearWithin = [&](const Vec3d& x, double spacing) {
+        // No point nearer than `spacing` (r, or more for a seed; within the 27 tiles): the cells that can hold
+        // one, nearest first, so that a crowded place is told apart after a few lookups.
+        auto clearWithin = [&](const Vec3d& x, const std::vector<Vec3i>& reach, double spacing) {
             const Vec3i c = cellOf(x);
-            const int w = int(std::ceil(spacing / cell_));
-            for (int i = c[0] - w; i <= c[0] + w; ++i)
-                for (int j = c[1] - w; j <= c[1] + w; ++j)
-                    for (int k = c[2] - w; k <= c[2] + w; ++k) {
-                        const Vec3i n(i, j, k);
-                        const Vec3i d = Vec3i(i >> kTileShift, j >> kTileShift, k >> kTileShift) - t + Vec3i::Ones();
-                        const Tile* tile = around[(d[0] * 3 + d[1]) * 3 + d[2]];
-                        if (!tile) continue;
-                        const int s = tile->cell[std::size_t(localOf(n))];
-                        if (s >= 0 && (tile->pts[std::size_t(s)] - x).squaredNorm() < spacing * spacing) return false;
-                    }
+            for (const Vec3i& o : reach) {
+                const Vec3i n = c + o;
+                const Vec3i d = Vec3i(n[0] >> kTileShift, n[1] >> kTileShift, n[2] >> kTileShift) - t + Vec3i::Ones();
+                const Tile* tile = around[(d[0] * 3 + d[1]) * 3 + d[2]];
+                if (!tile) continue;
+                const int s = tile->cell[std::size_t(localOf(n))];
+                if (s >= 0 && (tile->pts[std::size_t(s)] - x).squaredNorm() < spacing * spacing) return false;
+            }
             return true;
         };
-        auto clearOf = [&](const Vec3d& x) { return clearWithin(x, r_); };
+        auto clearOf = [&](const Vec3d& x) { return clearWithin(x, reachR_, r_); };
         // A point belongs to this tile when its cell does (the test the lookups above make, rounding included).
         // A file's shape is read through a sampler of this task's own.
         const auto shape = [&] {
@@ -210,7 +228,7 @@ private:
         // Then every cell 2 r from any point seeds (a random point in it, else its centre) and grows: the first
         // points of a tile no neighbour reached, and pieces of the shape the growth did not reach. (Seeding
         // wherever r allows would fill the growth's gaps too, denser along the tiles' faces.)
-        auto seedFreeCells = [&](double spacing, bool random) {
+        auto seedFreeCells = [&](const std::vector<Vec3i>& reach, double spacing, bool random) {
             for (int i = 0; i < kTileCells; ++i)
                 for (int j = 0; j < kTileCells; ++j)
                     for (int k = 0; k < kTileCells; ++k) {
@@ -220,17 +238,17 @@ private:
                         const Vec3d centre = corner + Vec3d::Constant(0.5 * cell_);
                         const Vec3d tries[2] = {random ? Vec3d(corner + cell_ * Vec3d(u01(rng), u01(rng), u01(rng))) : centre, centre};
                         for (const Vec3d& x : tries)
-                            if (cellOf(x) == c && mine(x) && clearWithin(x, spacing)) {
+                            if (cellOf(x) == c && mine(x) && clearWithin(x, reach, spacing)) {
                                 accept(x);
                                 grow();
                                 break;
                             }
                     }
         };
-        seedFreeCells(2.0 * r_, true);
+        seedFreeCells(reachSeed_, kSeedSpacing * r_, true);
         // A file's shape may hold thin pieces near others: cell centres 1.5 r clear of all points seed too
         // (r would fill the growth's gaps as well, 7% denser than the other shapes).
-        if constexpr (requires { Shape::kMayBeDisconnected; }) seedFreeCells(kPieceSeedSpacing * r_, false);
+        if constexpr (requires { Shape::kMayBeDisconnected; }) seedFreeCells(reachPiece_, kPieceSeedSpacing * r_, false);
     }
 
     /// The tile's own generator: the set's seed and the tile's coordinate mixed (splitmix64's finaliser).
@@ -246,6 +264,7 @@ private:
     unsigned seed_;
     Vec3d lo_, hi_;
     Vec3i tiles_;
+    std::vector<Vec3i> reachR_, reachSeed_, reachPiece_;  ///< offsetsWithin r, and the seeds' spacings
     std::unordered_map<uint64_t, Tile> done_;
 };
 
