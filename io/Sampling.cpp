@@ -16,21 +16,37 @@
 namespace mpm {
 
 namespace {
+/// A lattice of the given spacing over the shape's bounds, each point jittered, those inside kept; of a
+/// part, only its range of them. The jitter is drawn in lattice order, so a part takes two passes (count,
+/// then keep its range) and holds only its points: the parts are the whole sampling cut.
 template <class Shape>
-std::vector<Vec3d> jitteredGrid(const Shape& shape, double spacing, double jitterFraction, unsigned seed) {
+std::vector<Vec3d> jitteredGrid(const Shape& shape, double spacing, double jitterFraction, unsigned seed, SamplePart part = {}) {
     Vec3d lo, hi;
     shape.bounds(lo, hi);
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> jitter(-jitterFraction * spacing, jitterFraction * spacing);
-    std::vector<Vec3d> out;
     const Vec3i n = ((hi - lo) / spacing).array().ceil().cast<int>();
-    for (int i = 0; i < n[0]; ++i)
-        for (int j = 0; j < n[1]; ++j)
-            for (int k = 0; k < n[2]; ++k) {
-                const Vec3d x =
-                    lo + (Vec3d(i, j, k) + Vec3d::Constant(0.5)) * spacing + Vec3d(jitter(rng), jitter(rng), jitter(rng));
-                if (shape.contains(x)) out.push_back(x);
-            }
+    auto eachInside = [&](auto&& f) {
+        std::mt19937 rng(seed);
+        std::uniform_real_distribution<double> jitter(-jitterFraction * spacing, jitterFraction * spacing);
+        for (int i = 0; i < n[0]; ++i)
+            for (int j = 0; j < n[1]; ++j)
+                for (int k = 0; k < n[2]; ++k) {
+                    const Vec3d x =
+                        lo + (Vec3d(i, j, k) + Vec3d::Constant(0.5)) * spacing + Vec3d(jitter(rng), jitter(rng), jitter(rng));
+                    if (shape.contains(x)) f(x);
+                }
+    };
+    std::vector<Vec3d> out;
+    if (part.parts <= 1) {
+        eachInside([&](const Vec3d& x) { out.push_back(x); });
+        return out;
+    }
+    std::size_t total = 0, k = 0;
+    eachInside([&](const Vec3d&) { ++total; });
+    const std::size_t begin = total * std::size_t(part.part) / std::size_t(part.parts), end = total * std::size_t(part.part + 1) / std::size_t(part.parts);
+    eachInside([&](const Vec3d& x) {
+        if (k >= begin && k < end) out.push_back(x);
+        ++k;
+    });
     return out;
 }
 
@@ -304,12 +320,13 @@ std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCe
     if (method != Sampling::Poisson) {
         const double jitter = method == Sampling::Grid ? kGridJitter : 0.0;
         double spacing = std::cbrt(1.0 / perVolume);
+        if (count <= 0) return jitteredGrid(shape, spacing, jitter, seed, part);
         pts = jitteredGrid(shape, spacing, jitter, seed);
         // A sphere may hold slightly fewer lattice points than asked: refine until there are enough.
         while (count > 0 && (long long)pts.size() < count) pts = jitteredGrid(shape, spacing *= 0.97, jitter, seed);
     } else {
         double r = std::cbrt(1.0 / (kPoissonPacking * perVolume));
-        // Only a density-given Poisson set samples its part alone; an exact count picks from the whole.
+        // A set given by its density samples its part alone; an exact count picks from the whole.
         if (count <= 0) return poissonDiskIn(shape, r, seed, part);
         pts = poissonDiskIn(shape, r, seed, SamplePart{});
         while ((long long)pts.size() < count) pts = poissonDiskIn(shape, r *= 0.95, seed, SamplePart{});

@@ -45,8 +45,9 @@ struct SamplePart {
 };
 
 /// Samples the shape. With count > 0 exactly count points are returned (a random subset of a denser
-/// sampling, which keeps the minimum spacing); otherwise particlesPerCell sets the density. A Poisson-disk
-/// set given by its density samples only the part's tiles; the others are sampled whole and then shared.
+/// sampling, which keeps the minimum spacing); otherwise particlesPerCell sets the density. A set given by
+/// its density holds only its part's points (a Poisson-disk set samples only its part's tiles); one given by
+/// its count is sampled whole and then cut.
 std::vector<Vec3d> sampleShape(const SetRegion& shape, double dx, double particlesPerCell, long long count, Sampling method,
                                unsigned seed, SamplePart part = {});
 

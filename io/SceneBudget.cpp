@@ -106,9 +106,9 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         const bool gathers = scene.output.rankFiles == "gathered";
         const double perRank = ranks > 1 ? simulated / ranks + (gathers ? perParticle : 0.0) : simulated;
         const double output = ranks > 1 && scene.output.rankFiles == "per_rank" ? kOutputBytesPerParticle / ranks : kOutputBytesPerParticle;
-        // The emitter keeps its samples until it last emits: on ranks, each its part of a Poisson-disk set
-        // given by its density (sampled in tiles); every sample of the others while they are sampled.
-        const bool inParts = ranks > 1 && d.sampling == Sampling::Poisson && d.count <= 0 && !std::holds_alternative<PointsShape>(d.shape);
+        // The emitter keeps its samples until it last emits: on ranks, each its part of a set given by its
+        // density; every sample of a set given by its count, or of a point cloud, while it is sampled.
+        const bool inParts = ranks > 1 && d.count <= 0 && !std::holds_alternative<PointsShape>(d.shape);
         b.memoryBytes += total * (perRank + output) + double(s.particles) * sizeof(Vec3d) / (inParts ? ranks : 1);
         if (largestCoordinate / dx >= kMaxGridCoordinate) {
             std::ostringstream p;

@@ -136,6 +136,15 @@ TEST(Sampling, PoissonDiskPartsAreTheWholeSamplingCut) {
         }
         ASSERT_EQ(joined.size(), whole.size()) << parts << " parts";
         EXPECT_TRUE(std::equal(joined.begin(), joined.end(), whole.begin())) << parts << " parts";
+        // A jittered lattice holds only its part too, the whole lattice's points.
+        const auto lattice = sampleShape(region, 0.02, 8.0, 0, Sampling::Grid, 5);
+        std::vector<Vec3d> lattices;
+        for (int k = 0; k < parts; ++k) {
+            const auto part = sampleShape(region, 0.02, 8.0, 0, Sampling::Grid, 5, SamplePart{k, parts});
+            lattices.insert(lattices.end(), part.begin(), part.end());
+        }
+        ASSERT_EQ(lattices.size(), lattice.size()) << parts << " parts";
+        EXPECT_TRUE(std::equal(lattices.begin(), lattices.end(), lattice.begin())) << parts << " parts";
     }
     // Across tile borders the spacing holds too: a spatial hash of cell r finds every pair closer than r.
     std::unordered_map<long long, std::vector<std::size_t>> cells;
