@@ -123,6 +123,10 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
         removeStaleTemporaries();
     });
     guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_, Comm::world()); });
+    for (const Emitter& e : sim_->emitters()) {
+        heldSamples_ += (long long)e.positions.size();
+        setSamples_ += e.holdsPart() ? e.total : (long long)e.positions.size();
+    }
     layout_ = speciesLayout(scene_);
     identity_ = sceneIdentity(scene_.resolvedJson);
     hash_ = sceneHash(identity_);
@@ -387,11 +391,12 @@ void SceneRun::reportRanks() {
     const double sent = comm.max(double(comm.bytesSent()));
     const PhaseSeconds& t = sim_->phaseSeconds();
     const double share = comm.max(t.total() > 0.0 ? t.communication / t.total() : 0.0);
-    char line[256];
+    const double held = comm.max(double(heldSamples_));
+    char line[320];
     std::snprintf(line, sizeof line,
                   "%d ranks: %.0f to %.0f particles each at the end; leaves re-cut %d times; at most %.3g MB sent by a rank, "
-                  "at most %.1f%% of a rank's substep time spent communicating",
-                  comm.size(), fewest, most, sim_->rebalanceCount(), sent / 1e6, 100.0 * share);
+                  "at most %.1f%% of a rank's substep time spent communicating; at most %.0f of the sets' %lld samples held by a rank",
+                  comm.size(), fewest, most, sim_->rebalanceCount(), sent / 1e6, 100.0 * share, held, setSamples_);
     events_.note(line);
 }
 

@@ -85,6 +85,8 @@ private:
     std::string dir_;
     std::unique_ptr<DirectoryLock> lock_;
     std::unique_ptr<Simulation> sim_;
+    /// The sets' samples this rank held after sampling, and how many the sets have in all (the closing note).
+    long long heldSamples_ = 0, setSamples_ = 0;
     SpeciesLayout layout_;
     std::unique_ptr<FrameWriter> writer_;      ///< rank 0's (every process's, alone): frames and stats.csv
     std::unique_ptr<FrameWriter> partWriter_;  ///< each rank's part files (output.rank_files = "per_rank")

@@ -49,6 +49,12 @@ std::pair<long, long> spread(const std::string& log) {
     if (!std::regex_search(log, m, std::regex(R"(ranks: ([0-9]+) to ([0-9]+) particles each)"))) return {-1, -1};
     return {std::stol(m[1]), std::stol(m[2])};
 }
+/// The most set samples a rank held after sampling, and the sets' samples in all.
+std::pair<double, double> heldSamples(const std::string& log) {
+    std::smatch m;
+    if (!std::regex_search(log, m, std::regex(R"(at most ([0-9]+) of the sets' ([0-9]+) samples held by a rank)"))) return {-1, -1};
+    return {std::stod(m[1]), std::stod(m[2])};
+}
 int recuts(const std::string& log) {
     std::smatch m;
     return std::regex_search(log, m, std::regex(R"(leaves re-cut ([0-9]+) times)")) ? std::stoi(m[1]) : -1;
@@ -93,6 +99,10 @@ TEST(Ranks, OneTwoAndThreeRanksWriteTheSameBitsAndRebalancingKeepsThem) {
         EXPECT_GT(fewest, 0) << r.output;
         EXPECT_GT(most, 0) << r.output;
         EXPECT_GE(recuts(r.output), 1) << r.output;
+        // Each rank sampled and kept its part of the sets (the tiles' and the lattice's shares), not all of them.
+        const auto [held, samples] = heldSamples(r.output);
+        EXPECT_GT(held, 0.0) << r.output;
+        EXPECT_LT(held, (1.0 / ranks + 0.15) * samples) << r.output;
         // Rank 0 speaks for all: the opening line once.
         EXPECT_EQ(count(r.output, "mpm: " + kScene), 1) << r.output;
         expectSameOutput(dir + "/one", out, "ranks_mix", 18);
