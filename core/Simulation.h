@@ -234,8 +234,8 @@ private:
     std::vector<std::pair<Vec3i, long long>> allParticlesPerLeaf() const { return mergedOverRanks(particlesPerLeaf()); }
     /// Every rank's leaf counts added up, in Morton order (the same on every rank). Collective.
     std::vector<std::pair<Vec3i, long long>> mergedOverRanks(const std::vector<std::pair<Vec3i, long long>>& mine) const;
-    /// Emits a rank's part of a set (Emitter::holdsPart): ids as one process gives them, particles kept here
-    /// until the next substep sends them to their owners. Collective.
+    /// Emits a rank's part of a set (Emitter::holdsPart) with the ids one process gives them; once the leaves
+    /// are cut, the particles outside this rank's leaves go to their owners at once. Collective.
     void emitPart(const Emitter& e);
     /// Sends the particles of species s from index `from` on to their leaves' owners. Collective.
     void sendEmittedToOwners(int s, std::size_t from);

@@ -253,8 +253,8 @@ private:
                         const Vec3d corner = lo_ + c.cast<double>() * cell_;
                         const Vec3d centre = corner + Vec3d::Constant(0.5 * cell_);
                         const Vec3d tries[2] = {random ? Vec3d(corner + cell_ * Vec3d(u01(rng), u01(rng), u01(rng))) : centre, centre};
-                        for (const Vec3d& x : tries)
-                            if (cellOf(x) == c && mine(x) && clearWithin(x, reach, spacing)) {
+                        for (int q = random ? 0 : 1; q < 2; ++q)
+                            if (const Vec3d& x = tries[q]; cellOf(x) == c && mine(x) && clearWithin(x, reach, spacing)) {
                                 accept(x);
                                 grow();
                                 break;
