@@ -42,7 +42,7 @@ std::vector<Vec3d> jitteredGrid(const Shape& shape, double spacing, double jitte
     }
     std::size_t total = 0, k = 0;
     eachInside([&](const Vec3d&) { ++total; });
-    const std::size_t begin = total * std::size_t(part.part) / std::size_t(part.parts), end = total * std::size_t(part.part + 1) / std::size_t(part.parts);
+    const auto [begin, end] = part.range(total);
     eachInside([&](const Vec3d& x) {
         if (k >= begin && k < end) out.push_back(x);
         ++k;
@@ -114,10 +114,20 @@ public:
                 for (std::size_t i = r.begin(); i < r.end(); ++i) fillTile(phase[i]);
             });
         }
+        // The halo's tiles go first, and each wanted tile's points are released once copied: the peak stays
+        // near one copy of the points.
+        std::unordered_map<uint64_t, Tile> kept;
+        std::size_t count = 0;
+        for (const Vec3i& t : wanted)
+            if (auto node = done_.extract(key(t)); !node.empty()) count += node.mapped().pts.size(), kept.insert(std::move(node));
+        done_.clear();
         std::vector<Vec3d> out;
+        out.reserve(count);
         for (const Vec3i& t : wanted) {
-            const auto it = done_.find(key(t));
-            if (it != done_.end()) out.insert(out.end(), it->second.pts.begin(), it->second.pts.end());
+            const auto it = kept.find(key(t));
+            if (it == kept.end()) continue;
+            out.insert(out.end(), it->second.pts.begin(), it->second.pts.end());
+            kept.erase(it);
         }
         return out;
     }
@@ -300,16 +310,18 @@ template <class Shape>
 std::vector<Vec3d> poissonDiskIn(const Shape& shape, double r, unsigned seed, SamplePart part) {
     PoissonTilesIn<Shape> tiles(shape, r, seed);
     std::vector<Vec3i> order = tilesInOrder(tiles.tileCounts());
-    const auto cut = [&](int k) { return (long long)(order.size() * (unsigned long long)k / (unsigned long long)part.parts); };
-    if (part.parts > 1) order = std::vector<Vec3i>(order.begin() + cut(part.part), order.begin() + cut(part.part + 1));
+    if (part.parts > 1) {
+        const auto [begin, end] = part.range(order.size());
+        order = std::vector<Vec3i>(order.begin() + std::ptrdiff_t(begin), order.begin() + std::ptrdiff_t(end));
+    }
     return tiles.sample(order);
 }
 
 /// Samples [part / parts, (part + 1) / parts) of a sampling made whole.
 std::vector<Vec3d> shareOf(std::vector<Vec3d> all, SamplePart part) {
     if (part.parts <= 1) return all;
-    const auto cut = [&](int k) { return std::ptrdiff_t(all.size() * (unsigned long long)k / (unsigned long long)part.parts); };
-    return std::vector<Vec3d>(all.begin() + cut(part.part), all.begin() + cut(part.part + 1));
+    const auto [begin, end] = part.range(all.size());
+    return std::vector<Vec3d>(all.begin() + std::ptrdiff_t(begin), all.begin() + std::ptrdiff_t(end));
 }
 
 template <class Shape>

@@ -1,7 +1,9 @@
 #pragma once
 // Initial particle positions inside a shape: Poisson-disk sampling (Bridson 2007, "Fast Poisson disk
 // sampling in arbitrary dimensions"), as the thesis did, or a jittered lattice.
+#include <cstddef>
 #include <memory>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -42,6 +44,11 @@ inline constexpr int kPoissonAttempts = 30;
 /// in order, are the whole sampling in its order.
 struct SamplePart {
     int part = 0, parts = 1;
+    /// The part's items [first, second) of n in order: the part-th of `parts` nearly equal ranges.
+    std::pair<std::size_t, std::size_t> range(std::size_t n) const {
+        const auto cut = [&](int k) { return std::size_t((unsigned long long)n * (unsigned long long)k / (unsigned long long)parts); };
+        return {cut(part), cut(part + 1)};
+    }
 };
 
 /// Samples the shape. With count > 0 exactly count points are returned (a random subset of a denser

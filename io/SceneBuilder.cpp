@@ -192,8 +192,7 @@ static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i, SamplePa
         // A file is read whole; each part keeps its range of points.
         SetSamples all = pointCloudSet(scene, i, *points);
         if (part.parts <= 1) return all;
-        const std::size_t n = all.positions.size();
-        const std::size_t begin = n * std::size_t(part.part) / std::size_t(part.parts), end = n * std::size_t(part.part + 1) / std::size_t(part.parts);
+        const auto [begin, end] = part.range(all.positions.size());
         auto cut = [&](auto& arr) {
             if (!arr.empty()) arr = std::decay_t<decltype(arr)>(arr.begin() + std::ptrdiff_t(begin), arr.begin() + std::ptrdiff_t(end));
         };
