@@ -21,12 +21,40 @@ struct Slope {
     bool gridAligned = false;  ///< flat floor, gravity tilted; otherwise a tilted plane under vertical gravity
 };
 
-/// When the friction cases measure the block: after the release has rung down (about 4 periods of the block's
-/// lowest vertical mode), to the end, sampled every kSample seconds.
+/// When the friction cases measure the block: after the relaxed release (about 4 periods of the block's lowest
+/// vertical mode), to the end, sampled every kSample seconds.
 constexpr double kSettled = 0.1, kSlideEnd = 0.5, kSample = 0.01;
 
+/// Runs to kSettled with kinetic damping (dynamic relaxation, Barnes 1999): whenever the kinetic energy of the
+/// block's motion relative to its centroid passes a peak, every particle's velocity is set to the centroid's and
+/// its affine velocity to zero. The block keeps its deformation and its sliding, and loses the ringing its
+/// release starts: the analytic static state is the continuum's, and the grid's differs from it by a fraction
+/// of a cell, enough at dx = 0.01 m to ring the normal force past the friction's margin (measured: 0.02-0.05
+/// m/s of vertical ringing throughout, and 0.5 cells of creep at mu = 0.7).
+double settle(Simulation& sim, ParticleArrays& P) {
+    const auto start = std::chrono::steady_clock::now();
+    const double target = sim.settings().targetDt();
+    double previous = 0.0;
+    while (sim.time() < kSettled - 1e-12) {
+        sim.substep(std::min(target, kSettled - sim.time()));
+        double m = 0.0;
+        Vec3d momentum = Vec3d::Zero();
+        for (std::size_t i = 0; i < P.size(); ++i) m += P.mass[i], momentum += P.mass[i] * P.v[i].cast<double>();
+        const Vec3f mean = (momentum / m).cast<float>();
+        double relative = 0.0;
+        for (std::size_t i = 0; i < P.size(); ++i) relative += P.mass[i] * double((P.v[i] - mean).squaredNorm());
+        if (relative < previous) {
+            std::fill(P.v.begin(), P.v.end(), mean);
+            std::fill(P.C.begin(), P.C.end(), Mat3f::Zero());
+            relative = 0.0;
+        }
+        previous = relative;
+    }
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 // 9. Friction on a slope: a jelly block (E = 2e5 Pa, 0.2 x 0.1 x 0.1 m) released at rest in its static stress
-// state. A rigid block's answer:
+// state and relaxed (settle). A rigid block's answer:
 // it stays put when mu >= tan(theta), and otherwise slides with a = g (sin(theta) - mu cos(theta)).
 CaseResult slide(const CaseConfig& c, const Slope& k) {
     const double theta = k.thetaDegrees * M_PI / 180.0, g = 9.81;
@@ -69,7 +97,7 @@ CaseResult slide(const CaseConfig& c, const Slope& k) {
         }
         return std::pair{d / m, v / m};
     };
-    double wall = runUntil(sim, kSettled);
+    double wall = settle(sim, sp.p);
     const double d0 = along().first;
     std::vector<double> t, v;
     for (double at = kSettled + kSample; at <= kSlideEnd + 1e-9; at += kSample) {
