@@ -170,6 +170,102 @@ std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::uniq
     return mirrored;
 }
 
+std::size_t foldWallImages(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
+                           float dt, double tEnd, const RemoteNodes* remote) {
+    bool any = false;
+    for (const auto& c : colliders) any = any || c->boundary() != Boundary::Separate;
+    if (!any) return 0;
+    const LeafLookup lookup(grid);
+    const double dx = grid.dx(), invDx = 1.0 / dx;
+    const double halfDiagonal = 0.5 * std::sqrt(3.0) * (kLeafDim - 1) * dx, reach = kWallImageReach * dx;
+    constexpr double kOnNode = 1e-6;  // [cells]: as in forEachCorner, an image this close to a node is that node
+    struct Image {
+        int node;        ///< the node in front of the wall, in its leaf
+        Vec3i source;    ///< the node its image falls on, beyond the wall
+        Vec3f normal, velocity;
+        Boundary boundary;
+    };
+    std::vector<std::vector<Image>> images(grid.leafCount());
+    forEachLeafRange(grid.leafCount(), LeafGrain::Nodes, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t l = begin; l < end; ++l) {
+            if (remote && !(*remote->owned)[l]) continue;
+            const LeafView& leaf = grid.leaf(l);
+            const Vec3d centre = (leaf.origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
+            for (const auto& c : colliders) {
+                if (c->boundary() == Boundary::Separate) continue;
+                const double atCentre = c->signedDistance(centre, tEnd);  // phi is 1-Lipschitz
+                if (atCentre > halfDiagonal + reach || atCentre < -halfDiagonal) continue;
+                grid.writtenBox(l).forEach([&](int n) {
+                    if (leaf.mass[n] == 0.0f) return;
+                    const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
+                    const double phi = c->signedDistance(x, tEnd);
+                    if (!(phi > 0.0) || phi > reach) return;
+                    const Vec3d normal = c->normal(x, tEnd), image = (x - 2.0 * phi * normal) * invDx;
+                    const Vec3i source = image.array().round().cast<int>();
+                    if ((image - source.cast<double>()).cwiseAbs().maxCoeff() > kOnNode) return;
+                    const Vec3f vc = c->moving() ? Vec3f(c->velocity(x - phi * normal, tEnd).cast<float>()) : Vec3f(Vec3f::Zero());
+                    images[l].push_back({n, source, normal.cast<float>(), vc, c->boundary()});
+                });
+            }
+        }
+    });
+    // On ranks: the images' nodes other ranks own, from their owners (sorted, each once).
+    std::vector<Vec3i> far;
+    std::vector<float> farMass;
+    std::vector<Vec3f> farMomentum;
+    if (remote) {
+        for (const auto& leafImages : images)
+            for (const Image& im : leafImages)
+                if (!remote->local(im.source)) far.push_back(im.source);
+        std::sort(far.begin(), far.end(), nodeLess);
+        far.erase(std::unique(far.begin(), far.end()), far.end());
+        remote->fetch(far, farMass, farMomentum);
+    }
+    // Read every image first, then add: a node in front of one wall may lie beyond another (a corner).
+    struct Add {
+        int node;
+        float mass;
+        Vec3f momentum;
+    };
+    std::vector<std::vector<Add>> adds(grid.leafCount());
+    forEachLeafRange(grid.leafCount(), LeafGrain::Nodes, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t l = begin; l < end; ++l) {
+            const LeafView* near = &grid.leaf(l);
+            for (const Image& im : images[l]) {
+                float m = 0.0f;
+                Vec3f p = Vec3f::Zero();
+                if (remote && !remote->local(im.source)) {
+                    const std::size_t k = std::size_t(std::lower_bound(far.begin(), far.end(), im.source, nodeLess) - far.begin());
+                    m = farMass[k], p = farMomentum[k];
+                } else {
+                    int offset = 0;
+                    const LeafView* leaf = lookup.at(im.source, near, offset);
+                    if (!leaf) continue;
+                    m = leaf->mass[offset], p = Eigen::Map<const Vec3f>(leaf->momentum + 3 * offset);
+                }
+                if (m == 0.0f) continue;
+                const auto reflect = [&](const Vec3f& a) {
+                    return im.boundary == Boundary::Sticky ? Vec3f(-a) : Vec3f(a - 2.0f * a.dot(im.normal) * im.normal);
+                };
+                // The image's momentum reflected about the wall's, and its gravity impulse reflected (the update
+                // adds m dt g to the node's whole mass after).
+                const Vec3f momentum = m * im.velocity + reflect(p - m * im.velocity) + m * dt * (reflect(gravity) - gravity);
+                adds[l].push_back({im.node, m, momentum});
+            }
+        }
+    });
+    std::size_t folded = 0;
+    for (std::size_t l = 0; l < adds.size(); ++l) {
+        const LeafView& leaf = grid.leaf(l);
+        for (const Add& a : adds[l]) {
+            leaf.mass[a.node] += a.mass;
+            Eigen::Map<Vec3f>(leaf.momentum + 3 * a.node) += a.momentum;
+        }
+        folded += adds[l].size();
+    }
+    return folded;
+}
+
 ProjectionSummary projectOutOfColliders(const SparseGrid& grid, std::vector<AnySpecies>& species,
                                         const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd, float dt, const Vec3d& gravity) {
     if (colliders.empty()) return {};

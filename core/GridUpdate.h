@@ -46,6 +46,21 @@ struct RemoteNodes {
 std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd,
                              const RemoteNodes* remote = nullptr);
 
+/// Mirror mode's wall images, before the grid update (simulation.wall_ghosts = "mirror"): a wall as a mirror puts
+/// beyond it the image of the material before it, whose particles scatter mass, momentum and stress impulse onto
+/// the nodes before the wall as the real ones scatter onto the nodes beyond it. So a node of mass in front of a
+/// non-`separate` collider (0 < phi <= kWallImageReach cells) whose image across the surface is a grid node adds
+/// that node's mass and momentum (of the step's P2G, stress impulse included) reflected: odd about the wall's
+/// velocity for `sticky`, the normal part odd for `slip`, and the image's gravity reflected alike. For a wall on
+/// the grid's lines (or halfway between) this is the scatter of mirrored particles exactly, and held bodies
+/// become second order (docs/method.md, section 7); where the image is not a node (a tilted or curved wall) the
+/// node gets nothing, and the mirror pass after the update acts alone. Images are read before anything is added.
+/// On ranks (`remote` given) only owned leaves' nodes take images, and images in leaves other ranks own come
+/// from their owners (`remote.fetch`, collective). Returns the number of nodes that took an image.
+inline constexpr double kWallImageReach = 2.5;  ///< [cells] the cubic stencil's 2 and a particle's quarter cell
+std::size_t foldWallImages(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
+                           float dt, double tEnd, const RemoteNodes* remote = nullptr);
+
 struct ProjectionSummary {
     ExactSum work;          ///< work moving colliders did on the particles they moved
     float maxSpeed = 0.0f;  ///< of those particles

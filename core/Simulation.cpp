@@ -429,6 +429,25 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     PhaseClock clock;
     double computing = 0.0;  // the caller books this phase's time less its communication as grid
     const auto local = [&](const Vec3i& node) { return ownerOf(leafOfNode(node)) == comm_->rank(); };
+    // The remote reads of the mirror passes, field by field.
+    const auto remoteNodes = [&](std::size_t f) {
+        RemoteNodes remote;
+        if (ranks) {
+            remote.owned = owned(f);
+            remote.local = local;
+            remote.fetch = [&, f](const std::vector<Vec3i>& nodes, std::vector<float>& m, std::vector<Vec3f>& v) {
+                clock.lap(computing);
+                fetchNodes(fields_[f], nodes, m, v);
+                clock.lap(phases_.communication);
+            };
+        }
+        return remote;
+    };
+    if (mirror)
+        for (std::size_t f = 0; f < fields_.size(); ++f) {
+            const RemoteNodes remote = remoteNodes(f);
+            foldWallImages(fields_[f], colliders_, g, dt, tEnd, ranks ? &remote : nullptr);
+        }
     GridUpdateResult out;
     if (fields_.size() == 1) {
         out = updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface, true, owned(0));
@@ -456,16 +475,7 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     }
     if (mirror)
         for (std::size_t f = 0; f < fields_.size(); ++f) {
-            RemoteNodes remote;
-            if (ranks) {
-                remote.owned = owned(f);
-                remote.local = local;
-                remote.fetch = [&](const std::vector<Vec3i>& nodes, std::vector<float>& m, std::vector<Vec3f>& v) {
-                    clock.lap(computing);
-                    fetchNodes(fields_[f], nodes, m, v);
-                    clock.lap(phases_.communication);
-                };
-            }
+            const RemoteNodes remote = remoteNodes(f);
             mirrorGhostNodes(fields_[f], colliders_, tEnd, ranks ? &remote : nullptr);
         }
     if (ranks) {
