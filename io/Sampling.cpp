@@ -42,7 +42,9 @@ std::vector<Vec3d> jitteredGrid(const Shape& shape, double spacing, double jitte
     }
     std::size_t total = 0, k = 0;
     eachInside([&](const Vec3d&) { ++total; });
-    const auto [begin, end] = part.range(total);
+    // Plain variables, not a structured binding: clang 14 cannot capture one in a lambda.
+    const std::pair<std::size_t, std::size_t> range = part.range(total);
+    const std::size_t begin = range.first, end = range.second;
     eachInside([&](const Vec3d& x) {
         if (k >= begin && k < end) out.push_back(x);
         ++k;

@@ -192,7 +192,8 @@ static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i, SamplePa
         // A file is read whole; each part keeps its range of points.
         SetSamples all = pointCloudSet(scene, i, *points);
         if (part.parts <= 1) return all;
-        const auto [begin, end] = part.range(all.positions.size());
+        const std::pair<std::size_t, std::size_t> range = part.range(all.positions.size());  // captured below: no binding
+        const std::size_t begin = range.first, end = range.second;
         auto cut = [&](auto& arr) {
             if (!arr.empty()) arr = std::decay_t<decltype(arr)>(arr.begin() + std::ptrdiff_t(begin), arr.begin() + std::ptrdiff_t(end));
         };
