@@ -89,6 +89,41 @@ bool velocityAt(const Vec3d& cells, Read&& read, Vec3f& v) {
     v = sum / weightSum;
     return true;
 }
+/// Node values for a pass that reads nodes of other leaves: a node's mass and the vector its leaf holds (momentum
+/// before the update, velocity after). On ranks, the `wanted` nodes in leaves other ranks own (whose values here
+/// are partial sums) are fetched from their owners once, sorted and each once, when the reader is made
+/// (collective: every rank makes one).
+class NodeReader {
+public:
+    NodeReader(const SparseGrid& grid, const RemoteNodes* remote, const std::vector<Vec3i>& wanted) : lookup_(grid), remote_(remote) {
+        if (!remote) return;
+        for (const Vec3i& node : wanted)
+            if (!remote->local(node)) far_.push_back(node);
+        std::sort(far_.begin(), far_.end(), nodeLess);
+        far_.erase(std::unique(far_.begin(), far_.end()), far_.end());
+        remote->fetch(far_, farMass_, farVector_);
+    }
+    /// False where no leaf holds the node; `near` is the leaf tried first.
+    bool read(const Vec3i& node, const LeafView* near, float& m, Vec3f& v) const {
+        if (remote_ && !remote_->local(node)) {
+            const std::size_t k = std::size_t(std::lower_bound(far_.begin(), far_.end(), node, nodeLess) - far_.begin());
+            m = farMass_[k], v = farVector_[k];
+            return true;
+        }
+        int offset = 0;
+        const LeafView* leaf = lookup_.at(node, near, offset);
+        if (!leaf) return false;
+        m = leaf->mass[offset], v = Eigen::Map<const Vec3f>(leaf->momentum + 3 * offset);
+        return true;
+    }
+
+private:
+    LeafLookup lookup_;
+    const RemoteNodes* remote_;
+    std::vector<Vec3i> far_;
+    std::vector<float> farMass_;
+    std::vector<Vec3f> farVector_;
+};
 }  // namespace
 
 std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd,
@@ -96,7 +131,6 @@ std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::uniq
     bool any = false;
     for (const auto& c : colliders) any = any || c->boundary() != Boundary::Separate;
     if (!any) return 0;
-    const LeafLookup lookup(grid);
     const double invDx = 1.0 / grid.dx();
     // The ghosts of every (owned) leaf first.
     struct Ghost {
@@ -118,39 +152,18 @@ std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::uniq
             }
         }
     });
-    // On ranks: the images' nodes other ranks own, from their owners (sorted, each once).
-    std::vector<Vec3i> far;
-    std::vector<float> farMass;
-    std::vector<Vec3f> farVelocity;
-    if (remote) {
+    // On ranks: the images' nodes other ranks own, from their owners.
+    std::vector<Vec3i> wanted;
+    if (remote)
         for (const auto& leafGhosts : ghosts)
-            for (const Ghost& gh : leafGhosts)
-                forEachCorner(gh.g.mirror * invDx, [&](const Vec3i& node, float) {
-                    if (!remote->local(node)) far.push_back(node);
-                });
-        std::sort(far.begin(), far.end(), nodeLess);
-        far.erase(std::unique(far.begin(), far.end()), far.end());
-        remote->fetch(far, farMass, farVelocity);
-    }
+            for (const Ghost& gh : leafGhosts) forEachCorner(gh.g.mirror * invDx, [&](const Vec3i& node, float) { wanted.push_back(node); });
+    const NodeReader reader(grid, remote, wanted);
     // Read every image first, then write: an image may lie next to another ghost.
     std::vector<std::vector<std::pair<int, Vec3f>>> values(grid.leafCount());
     forEachLeafRange(grid.leafCount(), LeafGrain::Nodes, [&](std::size_t begin, std::size_t end) {
         for (std::size_t l = begin; l < end; ++l) {
             const LeafView* near = &grid.leaf(l);
-            const auto read = [&](const Vec3i& node, float& m, Vec3f& v) {
-                if (remote && !remote->local(node)) {
-                    const std::size_t k = std::size_t(std::lower_bound(far.begin(), far.end(), node, nodeLess) - far.begin());
-                    m = farMass[k];
-                    v = farVelocity[k];
-                    return true;
-                }
-                int offset = 0;
-                const LeafView* leaf = lookup.at(node, near, offset);
-                if (!leaf) return false;
-                m = leaf->mass[offset];
-                v = Eigen::Map<const Vec3f>(leaf->momentum + 3 * offset);
-                return true;
-            };
+            const auto read = [&](const Vec3i& node, float& m, Vec3f& v) { return reader.read(node, near, m, v); };
             for (const Ghost& gh : ghosts[l]) {
                 const Collider::Ghost& g = gh.g;
                 Vec3f image;
@@ -175,7 +188,6 @@ std::size_t foldWallImages(const SparseGrid& grid, const std::vector<std::unique
     bool any = false;
     for (const auto& c : colliders) any = any || c->boundary() != Boundary::Separate;
     if (!any) return 0;
-    const LeafLookup lookup(grid);
     const double dx = grid.dx(), invDx = 1.0 / dx;
     const double halfDiagonal = 0.5 * std::sqrt(3.0) * (kLeafDim - 1) * dx, reach = kWallImageReach * dx;
     constexpr double kOnNode = 1e-6;  // [cells]: as in forEachCorner, an image this close to a node is that node
@@ -209,18 +221,12 @@ std::size_t foldWallImages(const SparseGrid& grid, const std::vector<std::unique
             }
         }
     });
-    // On ranks: the images' nodes other ranks own, from their owners (sorted, each once).
-    std::vector<Vec3i> far;
-    std::vector<float> farMass;
-    std::vector<Vec3f> farMomentum;
-    if (remote) {
+    // On ranks: the images' nodes other ranks own, from their owners.
+    std::vector<Vec3i> wanted;
+    if (remote)
         for (const auto& leafImages : images)
-            for (const Image& im : leafImages)
-                if (!remote->local(im.source)) far.push_back(im.source);
-        std::sort(far.begin(), far.end(), nodeLess);
-        far.erase(std::unique(far.begin(), far.end()), far.end());
-        remote->fetch(far, farMass, farMomentum);
-    }
+            for (const Image& im : leafImages) wanted.push_back(im.source);
+    const NodeReader reader(grid, remote, wanted);
     // Read every image first, then add: a node in front of one wall may lie beyond another (a corner).
     struct Add {
         int node;
@@ -234,16 +240,7 @@ std::size_t foldWallImages(const SparseGrid& grid, const std::vector<std::unique
             for (const Image& im : images[l]) {
                 float m = 0.0f;
                 Vec3f p = Vec3f::Zero();
-                if (remote && !remote->local(im.source)) {
-                    const std::size_t k = std::size_t(std::lower_bound(far.begin(), far.end(), im.source, nodeLess) - far.begin());
-                    m = farMass[k], p = farMomentum[k];
-                } else {
-                    int offset = 0;
-                    const LeafView* leaf = lookup.at(im.source, near, offset);
-                    if (!leaf) continue;
-                    m = leaf->mass[offset], p = Eigen::Map<const Vec3f>(leaf->momentum + 3 * offset);
-                }
-                if (m == 0.0f) continue;
+                if (!reader.read(im.source, near, m, p) || m == 0.0f) continue;
                 const auto reflect = [&](const Vec3f& a) {
                     return im.boundary == Boundary::Sticky ? Vec3f(-a) : Vec3f(a - 2.0f * a.dot(im.normal) * im.normal);
                 };
