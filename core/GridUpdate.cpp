@@ -1,6 +1,7 @@
 #include "core/GridUpdate.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "sparse/LeafLookup.h"
 #include "sparse/LeafParallel.h"
@@ -89,6 +90,11 @@ bool velocityAt(const Vec3d& cells, Read&& read, Vec3f& v) {
     v = sum / weightSum;
     return true;
 }
+/// Whether material moving at `normalSpeed` relative to a wall (along its normal) arrives at it or leaves it, as
+/// opposed to resting on it: it covers more than kMirrorNormalCells of a cell in the step. The mirror passes leave
+/// such a node held, because a mirrored arrival bounces back off the ghost nodes (docs/method.md, section 7).
+bool crossesWall(float normalSpeed, float dt, double dx) { return std::abs(double(normalSpeed) * dt) > kMirrorNormalCells * dx; }
+
 /// Node values for a pass that reads nodes of other leaves: a node's mass and the vector its leaf holds (momentum
 /// before the update, velocity after). On ranks, the `wanted` nodes in leaves other ranks own (whose values here
 /// are partial sums) are fetched from their owners once, sorted and each once, when the reader is made
@@ -126,7 +132,7 @@ private:
 };
 }  // namespace
 
-std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd,
+std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, float dt, double tEnd,
                              const RemoteNodes* remote) {
     bool any = false;
     for (const auto& c : colliders) any = any || c->boundary() != Boundary::Separate;
@@ -169,6 +175,7 @@ std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::uniq
                 Vec3f image;
                 if (!velocityAt(g.mirror * invDx, read, image)) continue;
                 const Vec3f rel = image - g.velocity;
+                if (crossesWall(rel.dot(g.normal), dt, grid.dx())) continue;  // held, as the collider left it
                 const Vec3f ghost =
                     gh.boundary == Boundary::Sticky ? Vec3f(g.velocity - rel) : Vec3f(g.velocity + rel - 2.0f * rel.dot(g.normal) * g.normal);
                 values[l].emplace_back(g.node, ghost);
@@ -216,6 +223,8 @@ std::size_t foldWallImages(const SparseGrid& grid, const std::vector<std::unique
                     const Vec3i source = image.array().round().cast<int>();
                     if ((image - source.cast<double>()).cwiseAbs().maxCoeff() > kOnNode) return;
                     const Vec3f vc = c->moving() ? Vec3f(c->velocity(x - phi * normal, tEnd).cast<float>()) : Vec3f(Vec3f::Zero());
+                    const Vec3f rel = Eigen::Map<const Vec3f>(leaf.momentum + 3 * n) / leaf.mass[n] - vc;
+                    if (crossesWall(rel.dot(normal.cast<float>()), dt, dx)) return;
                     images[l].push_back({n, source, normal.cast<float>(), vc, c->boundary()});
                 });
             }

@@ -26,13 +26,20 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
                                       float dt, double tEnd, const SurfaceContact& surface, bool toVelocity = true,
                                       const std::vector<uint8_t>* owned = nullptr);
 
+/// [cells per step] Mirror mode treats material moving along a wall's normal by more than this in a step as
+/// arriving or leaving, not resting, and holds the wall there. Measured (docs/method.md, section 7): at 0.05-0.2
+/// a sticky wall hit at 1000 m/s is as stable as held (jelly to C 1.0, rubber 0.6-0.7, sand 0.8-1.0; at 1.0 it
+/// loses 0.1-0.3), while the held bodies' slowest nodes move 1e-5 cells a step and stay mirrored.
+inline constexpr double kMirrorNormalCells = 0.1;
+
 /// Ghost nodes (simulation.wall_ghosts = "mirror"): after the colliders, every node with mass inside a sticky or
 /// slip collider takes the velocity mirrored from its image across the surface, odd about the wall's velocity
 /// (sticky) or odd in the normal part and even in the tangential (slip), instead of being held at the wall's:
 /// the velocity field the first particle layer interpolates then meets the wall at the surface itself, not a
-/// fraction of a cell beyond. Only nodes whose image holds material are mirrored (the others stay held), so a
-/// body arriving at a wall meets the held condition. The images are read before any ghost is written.
-/// Returns the number of nodes mirrored.
+/// fraction of a cell beyond. Only nodes whose image holds material resting on the wall are mirrored: an image
+/// without material, or one whose normal speed relative to the wall covers more than kMirrorNormalCells of a cell
+/// in the step (material arriving or being torn away), leaves its ghost held, so a body hitting a wall meets the
+/// held condition. The images are read before any ghost is written. Returns the number of nodes mirrored.
 ///
 /// On ranks (`remote` given) only owned leaves' ghosts are mirrored, and an image's nodes in leaves other ranks
 /// own (whose values here are partial sums) are read from their owners through `remote.fetch`, called once on
@@ -43,7 +50,8 @@ struct RemoteNodes {
     /// The owners' mass and velocity of each node, in order.
     std::function<void(const std::vector<Vec3i>& nodes, std::vector<float>& mass, std::vector<Vec3f>& velocity)> fetch;
 };
-std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd,
+/// `dt`: the step the grid update took.
+std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, float dt, double tEnd,
                              const RemoteNodes* remote = nullptr);
 
 /// Mirror mode's wall images, before the grid update (simulation.wall_ghosts = "mirror"): a wall as a mirror puts
@@ -54,7 +62,9 @@ std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::uniq
 /// velocity for `sticky`, the normal part odd for `slip`, and the image's gravity reflected alike. For a wall on
 /// the grid's lines (or halfway between) this is the scatter of mirrored particles exactly, and held bodies
 /// become second order (docs/method.md, section 7); where the image is not a node (a tilted or curved wall) the
-/// node gets nothing, and the mirror pass after the update acts alone. Images are read before anything is added.
+/// node gets nothing, and the mirror pass after the update acts alone. A node whose own normal speed relative to
+/// the wall crosses kMirrorNormalCells of a cell in the step takes no image either (as the mirror pass holds its
+/// ghosts). Images are read before anything is added.
 /// On ranks (`remote` given) only owned leaves' nodes take images, and images in leaves other ranks own come
 /// from their owners (`remote.fetch`, collective). Returns the number of nodes that took an image.
 inline constexpr double kWallImageReach = 2.5;  ///< [cells] the cubic stencil's 2 and a particle's quarter cell

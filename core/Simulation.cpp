@@ -476,7 +476,7 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     if (mirror)
         for (std::size_t f = 0; f < fields_.size(); ++f) {
             const RemoteNodes remote = remoteNodes(f);
-            mirrorGhostNodes(fields_[f], colliders_, tEnd, ranks ? &remote : nullptr);
+            mirrorGhostNodes(fields_[f], colliders_, dt, tEnd, ranks ? &remote : nullptr);
         }
     if (ranks) {
         // The mirrored nodes go to their holders with the other ghost velocities.

@@ -69,9 +69,10 @@ void simulationKeys(V& v, SceneDesc& d) {
              s.contactFriction);
     v.choice(Key{.name = "wall_ghosts",
                  .help = "nodes inside sticky and slip colliders: held at the wall's velocity, or mirror (the velocity mirrored from "
-                         "their image across the surface, where that holds material, and the nodes before a wall on the grid's lines take "
-                         "their images' mass and stress impulse: no soft layer at the wall, second order for bodies held by it; "
-                         "unstable for bodies hitting a sticky wall at extreme speed, see docs/validation/report.md)",
+                         "their image across the surface, where that holds material resting on the wall, and the nodes before a wall on the "
+                         "grid's lines take their images' mass and stress impulse: no soft layer at the wall, second order for bodies held "
+                         "by it; material moving along the normal by over 0.1 cell a step (arriving, leaving) meets the held wall: as stable as held, "
+                         "see docs/validation/report.md)",
                  .noun = "wall ghosts"},
              s.wallGhosts, std::span<const Named<WallGhosts>>(kWallGhosts));
     v.choice(Key{.name = "wall_contact",
