@@ -124,16 +124,19 @@ public:
     virtual double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
                                const SurfaceContact& surface) const = 0;
 
-    /// A node inside the collider (phi < 0) with mass, for the mirror pass (simulation.wall_ghosts = "mirror"):
-    /// the node's mirror image across the surface, the outward normal and the collider's velocity at the surface.
-    struct Ghost {
-        int node;
-        Vec3d mirror;
-        Vec3f normal, velocity;
+    /// A node with mass near the surface whose mirror image across it, x - 2 phi n, is a grid node (a wall on the
+    /// grid's lines or halfway between), for the mirror passes (simulation.wall_ghosts = "mirror").
+    struct WallNode {
+        int node;        ///< in its leaf
+        Vec3i image;     ///< the node its mirror image falls on
+        double phi;      ///< [m] the node's signed distance: < 0 inside the collider (a ghost), > 0 in front of it
+        Vec3f normal;    ///< outward, at the node
+        Vec3f velocity;  ///< the collider's, at the surface
     };
-    /// Appends the ghost nodes of a leaf at time t (none for a leaf far from the surface).
-    virtual void ghostsOfLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
-                              std::vector<Ghost>& out) const = 0;
+    /// Appends a leaf's wall nodes at time t within `reach` [m] of the surface on either side (none for a leaf far
+    /// from it).
+    virtual void wallNodesOfLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, double reach, ColliderContext* context,
+                                 std::vector<WallNode>& out) const = 0;
 
     /// What the particle pass did to one leaf's particles.
     struct ProjectionResult {

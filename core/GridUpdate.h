@@ -31,45 +31,51 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
 /// a sticky wall hit at 1000 m/s is as stable as held (jelly to C 1.0, rubber 0.6-0.7, sand 0.8-1.0; at 1.0 it
 /// loses 0.1-0.3), while the held bodies' slowest nodes move 1e-5 cells a step and stay mirrored.
 inline constexpr double kMirrorNormalCells = 0.1;
+inline constexpr double kWallImageReach = 2.5;  ///< [cells] the cubic stencil's 2 and a particle's quarter cell
 
-/// Ghost nodes (simulation.wall_ghosts = "mirror"): after the colliders, every node with mass inside a sticky or
-/// slip collider takes the velocity mirrored from its image across the surface, odd about the wall's velocity
-/// (sticky) or odd in the normal part and even in the tangential (slip), instead of being held at the wall's:
-/// the velocity field the first particle layer interpolates then meets the wall at the surface itself, not a
-/// fraction of a cell beyond. Only nodes whose image holds material resting on the wall are mirrored: an image
-/// without material, or one whose normal speed relative to the wall covers more than kMirrorNormalCells of a cell
-/// in the step (material arriving or being torn away), leaves its ghost held, so a body hitting a wall meets the
-/// held condition. The images are read before any ghost is written. Returns the number of nodes mirrored.
-///
-/// On ranks (`remote` given) only owned leaves' ghosts are mirrored, and an image's nodes in leaves other ranks
-/// own (whose values here are partial sums) are read from their owners through `remote.fetch`, called once on
-/// every rank (collective): the values read are those one process reads, so the bits are the same.
+/// Mirror mode's walls (simulation.wall_ghosts = "mirror") treat a wall as a mirror: beyond it lies the image of
+/// the material before it. That image is exact where a node's image across the surface is a node, so the walls
+/// act only there: on sticky and slip walls on the grid's lines (or halfway between), within kWallImageReach
+/// cells of the surface. Tilted and curved walls stay held: mirroring an image interpolated between nodes, with
+/// no matching scatter, fed energy into sand resting on a hopper's cone until it blew up (docs/method.md,
+/// section 7).
+struct MirrorWallNode {
+    Collider::WallNode wall;
+    Boundary boundary;
+};
+using MirrorWalls = std::vector<std::vector<MirrorWallNode>>;  ///< per leaf of the grid
+/// The mirror walls' nodes at a substep's end time tEnd, found once for both passes (neither changes which nodes
+/// have mass); on ranks (`owned` given) of owned leaves only.
+MirrorWalls findMirrorWalls(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd,
+                            const std::vector<uint8_t>* owned = nullptr);
+
+/// On ranks, the mirror passes read an image node in a leaf another rank owns (whose values here are partial
+/// sums) from its owner through `fetch`, called once on every rank (collective): the values read are those one
+/// process reads, so the bits are the same.
 struct RemoteNodes {
     const std::vector<uint8_t>* owned = nullptr;             ///< per leaf of the grid: owned by this rank
     std::function<bool(const Vec3i& node)> local;           ///< whether this rank owns the node's leaf
     /// The owners' mass and velocity of each node, in order.
     std::function<void(const std::vector<Vec3i>& nodes, std::vector<float>& mass, std::vector<Vec3f>& velocity)> fetch;
 };
-/// `dt`: the step the grid update took.
-std::size_t mirrorGhostNodes(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, float dt, double tEnd,
-                             const RemoteNodes* remote = nullptr);
 
-/// Mirror mode's wall images, before the grid update (simulation.wall_ghosts = "mirror"): a wall as a mirror puts
-/// beyond it the image of the material before it, whose particles scatter mass, momentum and stress impulse onto
-/// the nodes before the wall as the real ones scatter onto the nodes beyond it. So a node of mass in front of a
-/// non-`separate` collider (0 < phi <= kWallImageReach cells) whose image across the surface is a grid node adds
-/// that node's mass and momentum (of the step's P2G, stress impulse included) reflected: odd about the wall's
-/// velocity for `sticky`, the normal part odd for `slip`, and the image's gravity reflected alike. For a wall on
-/// the grid's lines (or halfway between) this is the scatter of mirrored particles exactly, and held bodies
-/// become second order (docs/method.md, section 7); where the image is not a node (a tilted or curved wall) the
-/// node gets nothing, and the mirror pass after the update acts alone. A node whose own normal speed relative to
-/// the wall crosses kMirrorNormalCells of a cell in the step takes no image either (as the mirror pass holds its
-/// ghosts). Images are read before anything is added.
-/// On ranks (`remote` given) only owned leaves' nodes take images, and images in leaves other ranks own come
-/// from their owners (`remote.fetch`, collective). Returns the number of nodes that took an image.
-inline constexpr double kWallImageReach = 2.5;  ///< [cells] the cubic stencil's 2 and a particle's quarter cell
-std::size_t foldWallImages(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
-                           float dt, double tEnd, const RemoteNodes* remote = nullptr);
+/// Before the grid update: the particles of the image scatter mass, momentum and stress impulse onto the nodes in
+/// front of the wall as the real ones scatter onto the nodes beyond it. So a wall node in front of the wall adds
+/// its image node's mass and momentum (of the step's P2G, stress impulse included) reflected: odd about the
+/// wall's velocity for `sticky`, the normal part odd for `slip`, and the image's gravity reflected alike. This is
+/// the scatter of mirrored particles exactly, and held bodies become second order (docs/method.md, section 7). A
+/// node whose own normal speed relative to the wall crosses kMirrorNormalCells of a cell in the step (arriving
+/// or being torn away) takes no image. Images are read before anything is added. Returns the nodes folded.
+std::size_t foldWallImages(const SparseGrid& grid, const MirrorWalls& walls, const Vec3f& gravity, float dt,
+                           const RemoteNodes* remote = nullptr);
+
+/// After the colliders: a wall node inside the wall (a ghost) takes its image's velocity mirrored, odd about the
+/// wall's velocity (sticky) or odd in the normal part and even in the tangential (slip), instead of being held
+/// at the wall's: the velocity field the first particle layer interpolates then meets the wall at the surface
+/// itself, not a fraction of a cell beyond. An image without mass, or one whose normal speed relative to the wall
+/// covers more than kMirrorNormalCells of a cell in the step, leaves its ghost held, so a body hitting a wall
+/// meets the held condition. Images are read before any ghost is written. Returns the nodes mirrored.
+std::size_t mirrorGhostNodes(const SparseGrid& grid, const MirrorWalls& walls, float dt, const RemoteNodes* remote = nullptr);
 
 struct ProjectionSummary {
     ExactSum work;          ///< work moving colliders did on the particles they moved

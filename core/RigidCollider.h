@@ -141,23 +141,28 @@ public:
         return work;
     }
 
-    void ghostsOfLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
-                      std::vector<Ghost>& out) const override {
+    void wallNodesOfLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, double reach, ColliderContext* context,
+                         std::vector<WallNode>& out) const override {
         if (box.empty()) return;
         typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
         Frame f;
-        if (!frameNear(leaf.origin, dx, t, c, nodeReach(dx), f)) return;
+        if (!frameNear(leaf.origin, dx, t, c, nodeReach(dx) + reach, f)) return;
+        constexpr double kOnNode = 1e-6;  // [cells]: an image this close to a node is that node
+        const double invDx = 1.0 / dx;
         box.forEach([&](int n) {
             if (leaf.mass[n] == 0.0f) return;
             const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
             Vec3d rest, normal;
             double phi;
             nodeDistance(x, f, t, c, rest, phi, normal);
-            if (phi >= 0.0) return;
+            if (phi == 0.0 || std::abs(phi) > reach) return;
+            const Vec3d image = (x - 2.0 * phi * normal) * invDx;
+            const Vec3i node = image.array().round().template cast<int>();
+            if ((image - node.template cast<double>()).cwiseAbs().maxCoeff() > kOnNode) return;
             const Vec3d surface = x - phi * normal;
             const Vec3f vc = f.still ? Vec3f(Vec3f::Zero())
                                      : Vec3f(velocityAt(surface, f.pose.toRest(surface), f.pose, f.rates, t, c).template cast<float>());
-            out.push_back({n, x - 2.0 * phi * normal, normal.template cast<float>(), vc});
+            out.push_back({n, node, phi, normal.template cast<float>(), vc});
         });
     }
 

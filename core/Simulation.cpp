@@ -443,11 +443,13 @@ GridUpdateResult Simulation::updateGrid(float dt) {
         }
         return remote;
     };
-    if (mirror)
-        for (std::size_t f = 0; f < fields_.size(); ++f) {
-            const RemoteNodes remote = remoteNodes(f);
-            foldWallImages(fields_[f], colliders_, g, dt, tEnd, ranks ? &remote : nullptr);
-        }
+    // Mirror mode's wall nodes, field by field: the fold before the update and the mirror after share them.
+    std::vector<MirrorWalls> walls(mirror ? fields_.size() : 0);
+    for (std::size_t f = 0; f < walls.size(); ++f) {
+        walls[f] = findMirrorWalls(fields_[f], colliders_, tEnd, owned(f));
+        const RemoteNodes remote = remoteNodes(f);
+        foldWallImages(fields_[f], walls[f], g, dt, ranks ? &remote : nullptr);
+    }
     GridUpdateResult out;
     if (fields_.size() == 1) {
         out = updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface, true, owned(0));
@@ -473,11 +475,10 @@ GridUpdateResult Simulation::updateGrid(float dt) {
             out.work += r.work;
         }
     }
-    if (mirror)
-        for (std::size_t f = 0; f < fields_.size(); ++f) {
-            const RemoteNodes remote = remoteNodes(f);
-            mirrorGhostNodes(fields_[f], colliders_, dt, tEnd, ranks ? &remote : nullptr);
-        }
+    for (std::size_t f = 0; f < walls.size(); ++f) {
+        const RemoteNodes remote = remoteNodes(f);
+        mirrorGhostNodes(fields_[f], walls[f], dt, ranks ? &remote : nullptr);
+    }
     if (ranks) {
         // The mirrored nodes go to their holders with the other ghost velocities.
         clock.lap(computing);
