@@ -35,8 +35,9 @@ inline constexpr double kWallImageReach = 2.5;  ///< [cells] the cubic stencil's
 
 /// Mirror mode's walls (simulation.wall_ghosts = "mirror") treat a wall as a mirror: beyond it lies the image of
 /// the material before it. That image is exact where a node's image across the surface is a node, so the walls
-/// act only there: on sticky and slip walls on the grid's lines (or halfway between), within kWallImageReach
-/// cells of the surface. Tilted and curved walls stay held: mirroring an image interpolated between nodes, with
+/// act only there: on sticky and frictionless slip walls on the grid's lines (or halfway between), within
+/// kWallImageReach cells of the surface. Slip walls with friction stay held (their friction needs the held
+/// nodes' normal impulse). Tilted and curved walls stay held: mirroring an image interpolated between nodes, with
 /// no matching scatter, fed energy into sand resting on a hopper's cone until it blew up (docs/method.md,
 /// section 7).
 struct MirrorWallNode {

@@ -68,12 +68,12 @@ void simulationKeys(V& v, SceneDesc& d) {
     v.number(Key{.name = "contact_friction", .help = "Coulomb friction between bodies (multi_field)", .lo = 0.0, .hi = 100.0},
              s.contactFriction);
     v.choice(Key{.name = "wall_ghosts",
-                 .help = "nodes inside sticky and slip colliders: held at the wall's velocity, or mirror (on walls on the grid's lines or "
-                         "halfway between, such as axis-aligned planes and boxes: the nodes inside take the velocity mirrored from their image "
+                 .help = "nodes inside sticky and slip colliders: held at the wall's velocity, or mirror (on sticky and frictionless slip walls "
+                         "on the grid's lines or halfway between, such as axis-aligned planes and boxes: the nodes inside take the velocity mirrored from their image "
                          "across the surface where that holds material resting on the wall, and the nodes before it their images' mass and "
                          "stress impulse: no soft layer at the wall, second order for bodies held by it; material moving along the normal by "
-                         "over 0.1 cell a step (arriving, leaving) meets the held wall, and tilted or curved walls stay held: as stable as "
-                         "held, see docs/validation/report.md)",
+                         "over 0.1 cell a step (arriving, leaving) meets the held wall; tilted or curved walls and walls with friction stay "
+                         "held: as stable as held, see docs/validation/report.md)",
                  .noun = "wall ghosts"},
              s.wallGhosts, std::span<const Named<WallGhosts>>(kWallGhosts));
     v.choice(Key{.name = "wall_contact",

@@ -19,6 +19,7 @@ struct Slope {
     float mu = 0.3f;
     Boundary boundary = Boundary::Separate;
     bool gridAligned = false;  ///< flat floor, gravity tilted; otherwise a tilted plane under vertical gravity
+    WallGhosts ghosts = WallGhosts::Held;  ///< _mirror: simulation.wall_ghosts = "mirror"
 };
 
 /// When the friction cases measure the block: after the relaxed release (about 4 periods of the block's lowest
@@ -67,6 +68,7 @@ CaseResult slide(const CaseConfig& c, const Slope& k) {
         std::get<Plane>(floor.shape).normal = R * Vec3d::UnitY();
         floor.boundary = k.boundary;
         floor.friction = k.mu;
+        d.settings.wallGhosts = k.ghosts;
     });
     Simulation& sim = *s.sim;
     auto& sp = only<FixedCorotated>(sim);
@@ -213,7 +215,8 @@ CaseResult sphereDrop(const CaseConfig& c, WallContact contact) {
 
 std::string slopeName(const Slope& k) {
     std::ostringstream s;
-    s << (k.gridAligned ? "floor_" : "incline_") << boundaryName(k.boundary) << "_" << k.thetaDegrees << "deg_mu" << k.mu;
+    s << (k.gridAligned ? "floor_" : "incline_") << boundaryName(k.boundary) << "_" << k.thetaDegrees << "deg_mu" << k.mu
+      << (k.ghosts == WallGhosts::Mirror ? "_mirror" : "");
     return s.str();
 }
 
@@ -225,7 +228,9 @@ void addContactCases(std::vector<ValidationCase>& v) {
         {20, 0.2f, Boundary::Separate, false}, {20, 0.5f, Boundary::Separate, false}, {30, 0.3f, Boundary::Separate, false},
         {30, 0.7f, Boundary::Separate, false}, {30, 0.3f, Boundary::Slip, false},     {30, 0.7f, Boundary::Slip, false},
         {30, 0.3f, Boundary::Separate, true},  {30, 0.3f, Boundary::Slip, true},      {30, 0.7f, Boundary::Separate, true},
-        {30, 0.7f, Boundary::Slip, true}};
+        {30, 0.7f, Boundary::Slip, true},
+        // Mirror mode keeps a slip floor with friction held: mirrored, it lost most of its friction.
+        {30, 0.3f, Boundary::Slip, true, WallGhosts::Mirror},  {30, 0.7f, Boundary::Slip, true, WallGhosts::Mirror}};
     for (const Slope& k : slopes) {
         const bool sticks = k.mu >= std::tan(k.thetaDegrees * M_PI / 180.0);
         v.push_back({slopeName(k),
