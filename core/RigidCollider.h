@@ -25,6 +25,7 @@
 
 #include "core/Collider.h"
 #include "core/Motion.h"
+#include "core/Species.h"  // ParticleArrays, which the particle pass reads and writes
 
 namespace mpm {
 
