@@ -16,6 +16,14 @@ struct LevelSet::Near {
 
 namespace {
 constexpr int kCoarseLog2 = 3;  ///< coarse cells of 8 voxels: the level set's own leaf nodes
+
+/// Trilinear interpolation of the corners v[4 i + 2 j + k] of a voxel at the fraction f within it.
+double trilinear(const double v[8], const Vec3d& f) {
+    const double x00 = v[0] + f[2] * (v[1] - v[0]), x01 = v[2] + f[2] * (v[3] - v[2]);
+    const double x10 = v[4] + f[2] * (v[5] - v[4]), x11 = v[6] + f[2] * (v[7] - v[6]);
+    const double y0 = x00 + f[1] * (x01 - x00), y1 = x10 + f[1] * (x11 - x10);
+    return y0 + f[0] * (y1 - y0);
+}
 }  // namespace
 
 LevelSet::LevelSet(std::shared_ptr<const Grid> grid, double reach) : grid_(std::move(grid)) {
@@ -83,24 +91,37 @@ double LevelSet::Sampler::phi(const Vec3d& x) {
     double v[8];
     Vec3d f;
     impl_->corners(x, v, f);
-    const double x00 = v[0] + f[2] * (v[1] - v[0]), x01 = v[2] + f[2] * (v[3] - v[2]);
-    const double x10 = v[4] + f[2] * (v[5] - v[4]), x11 = v[6] + f[2] * (v[7] - v[6]);
-    const double y0 = x00 + f[1] * (x01 - x00), y1 = x10 + f[1] * (x11 - x10);
-    return y0 + f[0] * (y1 - y0);
+    return trilinear(v, f);
 }
 
 void LevelSet::Sampler::phiAndGradient(const Vec3d& x, double& phi, Vec3d& gradient) {
-    double v[8];
-    Vec3d f;
-    impl_->corners(x, v, f);
-    // Trilinear interpolation of the corners, k = 4 i + 2 j + l for the offset (i, j, l), and its derivatives.
-    const double x00 = v[0] + f[2] * (v[1] - v[0]), x01 = v[2] + f[2] * (v[3] - v[2]);
-    const double x10 = v[4] + f[2] * (v[5] - v[4]), x11 = v[6] + f[2] * (v[7] - v[6]);
-    const double y0 = x00 + f[1] * (x01 - x00), y1 = x10 + f[1] * (x11 - x10);
-    phi = y0 + f[0] * (y1 - y0);
-    const double dz00 = v[1] - v[0], dz01 = v[3] - v[2], dz10 = v[5] - v[4], dz11 = v[7] - v[6];
-    const double dz0 = dz00 + f[1] * (dz01 - dz00), dz1 = dz10 + f[1] * (dz11 - dz10);
-    gradient = Vec3d(y1 - y0, (1.0 - f[0]) * (x01 - x00) + f[0] * (x11 - x10), dz0 + f[0] * (dz1 - dz0)) * impl_->invVoxel;
+    Impl& m = *impl_;
+    const openvdb::Vec3d i = m.grid.worldToIndex(openvdb::Vec3d(x[0], x[1], x[2]));
+    const openvdb::Coord c(int(std::floor(i[0])), int(std::floor(i[1])), int(std::floor(i[2])));
+    const Vec3d f(i[0] - c.x(), i[1] - c.y(), i[2] - c.z());
+    // The values of the 4^3 block around x that the corners' central differences read, at (a, b, d) + 1.
+    double v[4][4][4];
+    for (int a = -1; a <= 2; ++a)
+        for (int b = -1; b <= 2; ++b)
+            for (int d = -1; d <= 2; ++d) {
+                // Central differences at the 8 corners read the 2^3 core and its face neighbours, not the block's edges.
+                const int outside = (a < 0 || a > 1) + (b < 0 || b > 1) + (d < 0 || d > 1);
+                v[a + 1][b + 1][d + 1] = outside > 1 ? 0.0 : double(m.acc.getValue(c.offsetBy(a, b, d)));
+            }
+    // phi: trilinear in the 8 corners, as phi() takes it. Its gradient: the corners' central differences, blended
+    // trilinearly. The interpolant's own derivative is a one-sided difference wherever x lies on a voxel's face (as a
+    // grid node does whenever the voxel divides dx), which tilts the normal of a curved surface by up to half a
+    // voxel's turn; the blend is symmetric there and continuous everywhere (docs/method.md, section 7).
+    double corner[8];
+    Vec3d g = Vec3d::Zero();
+    for (int k = 0; k < 8; ++k) {
+        const int a = k >> 2, b = (k >> 1) & 1, d = k & 1, A = a + 1, B = b + 1, D = d + 1;
+        corner[k] = v[A][B][D];
+        const double w = (a ? f[0] : 1.0 - f[0]) * (b ? f[1] : 1.0 - f[1]) * (d ? f[2] : 1.0 - f[2]);
+        g += w * Vec3d(v[A + 1][B][D] - v[A - 1][B][D], v[A][B + 1][D] - v[A][B - 1][D], v[A][B][D + 1] - v[A][B][D - 1]);
+    }
+    phi = trilinear(corner, f);
+    gradient = g * (0.5 * m.invVoxel);
 }
 
 struct VectorField::Sampler::Impl {

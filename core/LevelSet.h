@@ -23,7 +23,8 @@ public:
         ~Sampler();
         /// phi at a world point.
         double phi(const Vec3d& x);
-        /// phi and its gradient (the trilinear interpolant's) at a world point.
+        /// phi (trilinear) and its gradient (central differences at the voxel corners, blended trilinearly) at a
+        /// world point.
         void phiAndGradient(const Vec3d& x, double& phi, Vec3d& gradient);
         /// True when x lies farther than `reach` from the band: phi there, and anywhere within reach of x, is
         /// +-background with the sign phi(x) has.

@@ -103,10 +103,12 @@ public:
             const float m = leaf.mass[n];
             if (m == 0.0f) return;
             const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
-            Vec3d rest, normal;
+            Vec3d rest = f.still ? x : f.pose.toRest(x);
+            // Most nodes near a wall lie outside it: the normal (dearer for a level set) only where the wall acts.
+            if (onSurface(sign_ * geometry_.phi(rest, t, c), dx) > 0.0) return;
+            Vec3d normal;
             double phi;
-            nodeDistance(x, f, t, c, rest, phi, normal);
-            if (phi > 0.0) return;
+            nodeDistance(x, f, t, dx, c, rest, phi, normal);
             // A `separate` wall is unilateral contact: it acts once the material's surface has reached it.
             if (boundary() == Boundary::Separate && !surface.touches(m, phi / dx)) return;
             const Vec3f nWorld = normal.template cast<float>();
@@ -155,7 +157,7 @@ public:
             const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
             Vec3d rest, normal;
             double phi;
-            nodeDistance(x, f, t, c, rest, phi, normal);
+            nodeDistance(x, f, t, dx, c, rest, phi, normal);
             if (phi == 0.0 || std::abs(phi) > reach) return;
             const Vec3d image = (x - 2.0 * phi * normal) * invDx;
             const Vec3i node = image.array().round().template cast<int>();
@@ -238,13 +240,20 @@ private:
         const Vec3d centre = (origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
         return !skip(f.still ? centre : f.pose.toRest(centre), t, c, reach);
     }
+    /// A signed distance within kOnSurfaceCells of zero is zero: a node on the surface (a floor on the grid's lines)
+    /// is on it whichever way its position rounds through a pose. Without this a platform moved by keyframes held
+    /// its surface row of nodes in some substeps and not in others, as p(t) - R pivot rounded to +-1e-18 m.
+    static double onSurface(double phi, double dx) {
+        constexpr double kOnSurfaceCells = 1e-9;
+        return std::abs(phi) <= kOnSurfaceCells * dx ? 0.0 : phi;
+    }
     /// A node's rest-frame position, its signed distance (positive on the material's side) and the outward
     /// normal in world axes.
-    void nodeDistance(const Vec3d& x, const Frame& f, double t, typename Geometry::Context& c, Vec3d& rest, double& phi,
+    void nodeDistance(const Vec3d& x, const Frame& f, double t, double dx, typename Geometry::Context& c, Vec3d& rest, double& phi,
                       Vec3d& normal) const {
         rest = f.still ? x : f.pose.toRest(x);
         geometry_.phiNormal(rest, t, c, phi, normal);
-        phi *= sign_;
+        phi = onSurface(sign_ * phi, dx);
         normal = f.still ? Vec3d(sign_ * normal) : Vec3d(sign_ * (f.pose.R * normal));
     }
     /// Whether nothing within `reach` of a leaf centre can touch the collider: phi is 1-Lipschitz, so a

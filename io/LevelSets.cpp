@@ -4,6 +4,7 @@
 #include <assimp/scene.h>
 #include <openvdb/tools/GridTransformer.h>
 #include <openvdb/tools/LevelSetMeasure.h>
+#include <openvdb/tools/FastSweeping.h>
 #include <openvdb/tools/MeshToVolume.h>
 
 #include <algorithm>
@@ -119,7 +120,7 @@ openvdb::GridBase::Ptr readVdbGrid(const std::string& path, const std::string& g
 }  // namespace
 
 std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName, double reach,
-                                            const Placement& placement) {
+                                            const Placement& placement, double band) {
     const openvdb::GridBase::Ptr base = readVdbGrid(path, gridName);
     auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
     if (!grid) throw LevelSetError(path + ": grid \"" + gridName + "\" holds " + base->valueType() + " values; a level set holds floats");
@@ -150,6 +151,15 @@ std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::
         openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*grid, *out);
         out->setGridClass(openvdb::GRID_LEVEL_SET);
         grid = out;
+    }
+    // The background is the band's half width in world units (a level set's convention), stored as a float.
+    constexpr double kFloatRounding = 1e-6;
+    if (double(grid->background()) < band * (1.0 - kFloatRounding)) {
+        // Extend the band by solving |grad phi| = 1 outward from it (fast sweeping), which keeps the values the file
+        // has; a rebuild through a mesh would move them and break the field's symmetries.
+        const int grow = int(std::ceil((band - double(grid->background())) / vs[0]));
+        grid = openvdb::tools::dilateSdf(*grid, grow, openvdb::tools::NN_FACE_EDGE_VERTEX);
+        grid->setGridClass(openvdb::GRID_LEVEL_SET);
     }
     auto holder = std::make_shared<LevelSet::Grid>();
     holder->grid = grid;

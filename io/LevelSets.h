@@ -37,9 +37,12 @@ std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std
 
 /// The level set grid `grid` of a VDB file. A grid that is not a level set (a fog volume) is an error naming
 /// its class; a grid with a rotated or non-uniform transform is resampled onto an axis-aligned one.
-/// With a `placement`, the grid is moved there (its distances scaled with it).
+/// With a `placement`, the grid is moved there (its distances scaled with it). A band narrower than `band` [m]
+/// on either side of the surface (files made with 3 voxels, Houdini's default, at a voxel under a third of
+/// `band`) is grown to that width by OpenVDB's fast sweeping (dilateSdf): deeper, the field is flat and has no normal,
+/// and a node or particle there would not be held. 0: the band as the file has it.
 std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& grid, double reach,
-                                            const Placement& placement = {});
+                                            const Placement& placement = {}, double band = 0.0);
 
 /// The volume inside a level set's zero crossing [m^3] (OpenVDB's levelSetVolume).
 double insideVolume(const LevelSet& ls);

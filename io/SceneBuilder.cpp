@@ -24,17 +24,22 @@ std::string besideScene(const SceneDesc& scene, const std::string& file) {
     return p.is_absolute() ? file : (std::filesystem::path(scene.file).parent_path() / p).string();
 }
 
+/// How deep inside a collider's surface its level set must reach [m]: nodes get mass from particles up to the
+/// stencil's half width away, and particles may be a substep's travel inside before the particle pass moves them
+/// out; deeper than that no node or particle has business.
+constexpr double kInteriorCells = 3.0;
+double levelSetBand(double dx) { return kInteriorCells * dx; }
+
 /// The level set of a file shape, built or read once: placed by its transform (a collider), or in the file's
 /// own coordinates (`placed` false: a set, sampled there and then placed).
 std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const MeshShape& m, bool place = true) {
     // In the file's coordinates a scaled shape's cells are dx / scale.
     const double dx = scene.settings.dx / (place ? 1.0 : m.transform.scale), voxel = m.voxelSize > 0.0 ? m.voxelSize : 0.5 * dx;
-    // Outside the band reaches past a leaf's half diagonal of the skip test where it can; inside, the
-    // stencil's reach: deeper than that no node or particle has business.
-    constexpr double kExteriorCells = 2.0, kInteriorCells = 3.0;
+    // Outside the band reaches past a leaf's half diagonal of the skip test where it can; inside, levelSetBand.
+    constexpr double kExteriorCells = 2.0;
     try {
         const std::string path = besideScene(scene, m.file);
-        return meshLevelSet(place ? placed(readMesh(path), m.transform) : readMesh(path), path, voxel, m.thickness, kExteriorCells * dx + 3.0 * voxel, kInteriorCells * dx,
+        return meshLevelSet(place ? placed(readMesh(path), m.transform) : readMesh(path), path, voxel, m.thickness, kExteriorCells * dx + 3.0 * voxel, levelSetBand(dx),
                             colliderReach(dx));
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
@@ -43,7 +48,8 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
 
 std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v, bool place = true) {
     try {
-        return vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx), place ? v.transform : Placement{});
+        return vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx), place ? v.transform : Placement{},
+                           place ? levelSetBand(scene.settings.dx) : 0.0);
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
     }
@@ -66,13 +72,14 @@ std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::st
     try {
         const std::vector<int> frames = sequenceFrames(pattern);
         const double reach = colliderReach(scene.settings.dx);
-        const auto first = vdbLevelSet(sequenceFile(pattern, frames.front()), v.grid, reach, v.transform);  // checked now, not hours later
+        const double band = levelSetBand(scene.settings.dx);
+        const auto first = vdbLevelSet(sequenceFile(pattern, frames.front()), v.grid, reach, v.transform, band);  // checked now, not hours later
         if (!v.velocityGrid.empty() && v.transform.rotate.degrees != 0.0)
             throw LevelSetError(pattern + ": a rotated sequence cannot turn its velocity grid; leave out \"rotate\" or \"velocity_grid\"");
-        auto load = [pattern, grid = v.grid, vel = v.velocityGrid, reach, placement = v.transform](int f) {
+        auto load = [pattern, grid = v.grid, vel = v.velocityGrid, reach, placement = v.transform, band](int f) {
             LevelSetFrame frame;
             const std::string file = sequenceFile(pattern, f);
-            frame.phi = vdbLevelSet(file, grid, reach, placement);
+            frame.phi = vdbLevelSet(file, grid, reach, placement, band);
             if (!vel.empty()) frame.velocity = vdbVectorField(file, vel);
             return frame;
         };
