@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <numeric>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/Colliders.h"
@@ -11,6 +12,7 @@
 #include "core/LevelSetGeometry.h"
 #include "core/LevelSetSequence.h"
 #include "io/LevelSets.h"
+#include "io/MeshThickness.h"
 #include "io/PointFile.h"
 #include "io/Sampling.h"
 
@@ -30,23 +32,65 @@ std::string besideScene(const SceneDesc& scene, const std::string& file) {
 constexpr double kInteriorCells = 3.0;
 double levelSetBand(double dx) { return kInteriorCells * dx; }
 
+/// The finest voxel the builder picks by itself for a mesh collider [cells]: a mesh with walls thinner than two of
+/// these gets a warning from `mpm validate` instead (the field's memory grows as 1 / voxel^2).
+constexpr double kFinestAutoVoxelCells = 1.0 / 8.0;
+
+/// Whether a field of this voxel resolves a wall this thick: two voxels across it, to 1% (a faceted round wall
+/// measures thinner at its triangles' centres than at their corners: the example glass's 5 mm wall, 4.997 mm).
+bool resolves(double voxel, double wall) {
+    constexpr double kWallTolerance = 0.01;
+    return wall >= kVoxelsAcrossWall * voxel * (1.0 - kWallTolerance);
+}
+
+/// A mesh file's triangles and the voxel of its distance field.
+struct MeshField {
+    TriangleMesh mesh;
+    double voxel = 0.0;
+    WallThickness wall;   ///< the thinnest wall below two default voxels (a collider's; sets are not measured)
+};
+
+/// A mesh shape's triangles (placed by its transform for a collider, `place`; in the file's own coordinates for a
+/// set) and its voxel: the scene's `voxel_size`, else dx/2 for a set; for a collider dx/2, or finer where its solid
+/// (outside the mesh with `solidOutside`) has walls thinner than two voxels resolve, down to kFinestAutoVoxelCells.
+MeshField meshField(const SceneDesc& scene, const std::string& where, const MeshShape& m, bool place, bool solidOutside) {
+    // In the file's coordinates a scaled shape's cells are dx / scale.
+    const double dx = scene.settings.dx / (place ? 1.0 : m.transform.scale), coarse = 0.5 * dx;
+    MeshField f;
+    try {
+        const std::string path = besideScene(scene, m.file);
+        f.mesh = place ? placed(readMesh(path), m.transform) : readMesh(path);
+    } catch (const LevelSetError& e) {
+        throw SceneError(scene.file + ": " + where + "/file: " + e.what());
+    }
+    f.voxel = m.voxelSize > 0.0 ? m.voxelSize : coarse;
+    if (!place) return f;
+    // A shell is twice its half-thickness thick everywhere; a solid is measured.
+    f.wall = m.thickness > 0.0 ? WallThickness{2.0 * m.thickness, Vec3d::Zero(), -1}
+                               : thinnestWall(f.mesh, kVoxelsAcrossWall * std::max(coarse, m.voxelSize), solidOutside);
+    if (m.voxelSize <= 0.0 && !resolves(coarse, f.wall.thinnest))
+        f.voxel = std::max(f.wall.thinnest / kVoxelsAcrossWall, kFinestAutoVoxelCells * dx);
+    return f;
+}
+
 /// The level set of a file shape, built or read once: placed by its transform (a collider), or in the file's
 /// own coordinates (`placed` false: a set, sampled there and then placed).
-std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const MeshShape& m, bool place = true) {
-    // In the file's coordinates a scaled shape's cells are dx / scale.
-    const double dx = scene.settings.dx / (place ? 1.0 : m.transform.scale), voxel = m.voxelSize > 0.0 ? m.voxelSize : 0.5 * dx;
+std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const MeshShape& m, bool place = true,
+                                           bool solidOutside = false) {
+    const double dx = scene.settings.dx / (place ? 1.0 : m.transform.scale);
+    const MeshField f = meshField(scene, where, m, place, solidOutside);
     // Outside the band reaches past a leaf's half diagonal of the skip test where it can; inside, levelSetBand.
     constexpr double kExteriorCells = 2.0;
     try {
-        const std::string path = besideScene(scene, m.file);
-        return meshLevelSet(place ? placed(readMesh(path), m.transform) : readMesh(path), path, voxel, m.thickness, kExteriorCells * dx + 3.0 * voxel, levelSetBand(dx),
+        return meshLevelSet(f.mesh, besideScene(scene, m.file), f.voxel, m.thickness, kExteriorCells * dx + 3.0 * f.voxel, levelSetBand(dx),
                             colliderReach(dx));
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
     }
 }
 
-std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v, bool place = true) {
+std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v, bool place = true,
+                                           bool = false) {
     try {
         return vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx), place ? v.transform : Placement{},
                            place ? levelSetBand(scene.settings.dx) : 0.0);
@@ -99,7 +143,7 @@ std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index) 
     return std::visit(
         [&]<class S>(const S& shape) -> std::unique_ptr<Collider> {
             if constexpr (kFromFile<S>) {
-                const auto ls = levelSetOf(scene, where, shape);
+                const auto ls = levelSetOf(scene, where, shape, true, c.inside);
                 Vec3d lo, hi;
                 ls->bounds(lo, hi);
                 return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction,
@@ -379,6 +423,21 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
                               " particles start inside collider " + std::to_string(c) +
                               " (they are pushed out at the first substep); move the set or the collider");
         }
+    }
+    for (std::size_t c = 0; c < scene.colliders.size(); ++c) {
+        const auto* mesh = std::get_if<MeshShape>(&scene.colliders[c].shape);
+        if (!mesh) continue;
+        const std::string where = "/colliders/" + std::to_string(c);
+        const MeshField f = meshField(scene, where, *mesh, true, scene.colliders[c].inside);
+        if (resolves(f.voxel, f.wall.thinnest)) continue;
+        std::ostringstream w;
+        w.precision(3);
+        w << scene.file << ": " << where << "/file: " << mesh->file << " has walls as thin as " << f.wall.thinnest << " m";
+        if (f.wall.triangle >= 0) w << " (at " << f.wall.where.transpose() << ")";
+        w << "; its distance field's voxel of " << f.voxel << " m" << (mesh->voxelSize > 0.0 ? "" : " (the finest picked by itself, dx/8)")
+          << " resolves walls down to " << kVoxelsAcrossWall * f.voxel << " m, and material passes through thinner ones: set voxel_size to "
+          << f.wall.thinnest / kVoxelsAcrossWall << " or less";
+        out.push_back(w.str());
     }
     for (std::size_t a = 0; a < scene.sets.size(); ++a) {
         if (positions[a].empty() || std::holds_alternative<PointsShape>(scene.sets[a].shape)) continue;

@@ -12,7 +12,7 @@ namespace mpm {
 struct MeshShape {
     static constexpr const char* kType = "mesh";
     std::string file;
-    double voxelSize = 0.0;  ///< of the distance field; 0: half the grid spacing
+    double voxelSize = 0.0;  ///< of the distance field; 0: chosen by the builder (io/SceneBuilder.cpp, meshField)
     double thickness = 0.0;  ///< > 0: a shell of this half-thickness around the surface (open meshes need one)
     Placement transform;     ///< from the file's coordinates to the scene's
 
@@ -20,7 +20,10 @@ struct MeshShape {
     static void keys(V& v, MeshShape& s) {
         v.text(Key{.name = "file", .help = "triangle mesh (OBJ, PLY, STL, glTF, FBX, ...), relative to the scene file", .required = true},
                s.file);
-        v.number(Key{.name = "voxel_size", .help = "voxel of its distance field; 0: dx / 2", .lo = 0.0, .hi = kHuge, .unit = "m"},
+        v.number(Key{.name = "voxel_size",
+                     .help = "voxel of its distance field; 0: for a collider dx / 2, or finer (to dx / 8) so that its thinnest wall "
+                             "is two voxels thick (`mpm validate` warns of walls thinner than the field resolves); for a set dx / 2",
+                     .lo = 0.0, .hi = kHuge, .unit = "m"},
                  s.voxelSize);
         v.number(Key{.name = "thickness",
                      .help = "0: a closed mesh, solid inside; > 0: a shell of this half-thickness around the surface (needed for "
