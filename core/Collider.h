@@ -79,9 +79,20 @@ private:
 /// material has reached the collider's surface there: a node of mass m is covered to the share f = m / (rho dx^3) of its support, which a
 /// flat material surface s cells beyond the node gives when f = F(s) (F the kernel's covered fraction); the
 /// material touches the wall at the node when s + phi / dx <= 0.
+///
+/// rho is the rest density of the material at the node: one value when every body has the same, else that of the
+/// particles binned in the node's leaf (their stencils' base nodes in it), so that a body of another density
+/// elsewhere changes nothing (docs/method.md, section 7).
 struct SurfaceContact {
     float cellMass = 0.0f;                 ///< rest density times dx^3; 0: the wall acts wherever the stencil reaches
+    const float* leafCellMass = nullptr;   ///< per leaf of the field, where its bodies' densities differ
     double (*covered)(double) = nullptr;   ///< the kernel's covered fraction F(s), decreasing from 1 to 0
+    /// The contact test for the nodes of leaf l.
+    SurfaceContact ofLeaf(std::size_t l) const {
+        SurfaceContact s = *this;
+        if (leafCellMass) s.cellMass = leafCellMass[l], s.leafCellMass = nullptr;
+        return s;
+    }
     /// Whether a node of mass m at signed distance phi (cells) has the material at or past the wall.
     bool touches(float m, double phiCells) const {
         if (cellMass <= 0.0f) return true;

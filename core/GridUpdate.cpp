@@ -37,7 +37,9 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
                         if (m != 0.0f) v = v / m + dt * g;
                         else v.setZero();
                     });
-                for (std::size_t c = 0; c < colliders.size(); ++c) acc.work += colliders[c]->applyToLeaf(leaf, box, grid.dx(), tEnd, contexts[c].get(), surface);
+                const SurfaceContact leafSurface = surface.ofLeaf(l);
+                for (std::size_t c = 0; c < colliders.size(); ++c)
+                    acc.work += colliders[c]->applyToLeaf(leaf, box, grid.dx(), tEnd, contexts[c].get(), leafSurface);
                 box.forEach([&](int n) {
                     if (leaf.mass[n] != 0.0f) acc.maxSpeed = std::max(acc.maxSpeed, Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm());
                 });

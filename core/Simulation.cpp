@@ -1,6 +1,7 @@
 #include "core/Simulation.h"
 
 #include "sparse/LeafLookup.h"
+#include "sparse/LeafParallel.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -391,28 +392,111 @@ void Simulation::bin() {
         });
 }
 
-SurfaceContact Simulation::surfaceContact() {
+SurfaceContact Simulation::surfaceContact(std::size_t field) {
     SurfaceContact s;
     if (settings_.wallContact != WallContact::Surface) return s;
     bool unilateral = false;
     for (const auto& c : colliders_) unilateral = unilateral || c->boundary() == Boundary::Separate;
     if (!unilateral) return s;
-    // The material's rest density, mass over rest volume over all particles (exact for one material); it
-    // changes only when particles are added (nextId moves, on every rank alike), so it is measured again only then.
+    // The material's rest density, mass over rest volume over all particles (exact for one material), and whether
+    // the species differ in it; both change only when particles are added (nextId moves, on every rank alike).
     if (state_.nextId != restDensityVersion_) {
         ExactSum mass, volume;
+        std::vector<double> densities;
         for (const AnySpecies& sp : state_.species) {
             const ParticleArrays& P = particlesOf(sp);
-            for (std::size_t i = 0; i < P.size(); ++i) mass += double(P.mass[i]), volume += double(P.volume0[i]);
+            ExactSum m, v;
+            for (std::size_t i = 0; i < P.size(); ++i) {
+                mass += double(P.mass[i]), volume += double(P.volume0[i]);
+                m += double(P.mass[i]), v += double(P.volume0[i]);
+            }
+            comm_->sum(m);
+            comm_->sum(v);
+            if (v.value() > 0.0) densities.push_back(m.value() / v.value());
         }
         comm_->sum(mass);
         comm_->sum(volume);
         restDensity_ = volume.value() > 0.0 ? mass.value() / volume.value() : 0.0;
+        const auto [lo, hi] = std::minmax_element(densities.begin(), densities.end());
+        // Equal to a part in a million: sets of one material, whose particle masses are rounded to float.
+        constexpr double kSameDensity = 1e-6;
+        densitiesDiffer_ = !densities.empty() && *hi > *lo * (1.0 + kSameDensity);
         restDensityVersion_ = state_.nextId;
     }
     if (!(restDensity_ > 0.0)) return s;
-    s.cellMass = float(restDensity_ * std::pow(settings_.dx, 3));
+    const double cell = std::pow(settings_.dx, 3);
+    s.cellMass = float(restDensity_ * cell);
     withKernel(settings_.transfer.interpolation, [&]<class K>() { s.covered = &K::covered; });
+    if (!densitiesDiffer_) return s;
+    // Bodies of different densities: a leaf's nodes take their mass from the particles binned in it and in the 7
+    // leaves below it (stencils spill towards +x, +y, +z), so its density is theirs: mass over rest volume. A leaf
+    // none of them holds particles for takes the scene's.
+    const SparseGrid& grid = fields_[field];
+    const std::vector<int>& members = fieldSpecies_[field];
+    const std::vector<uint32_t>& leaves = grid.particleLeaves();
+    struct Sums {
+        double mass = 0.0, volume = 0.0;
+    };
+    std::vector<Sums> own(leaves.size());
+    forEachLeafRange(leaves.size(), LeafGrain::Particles, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const uint32_t l = leaves[i];
+            for (int k : members)
+                std::visit(
+                    [&](const auto& sp) {
+                        for (uint32_t p = sp.leafStart[l]; p < sp.leafStart[l + 1]; ++p)
+                            own[i].mass += double(sp.p.mass[p]), own[i].volume += double(sp.p.volume0[p]);
+                    },
+                    state_.species[std::size_t(k)]);
+        }
+    });
+    // On ranks the leaves below a leaf may hold their particles on other ranks: each rank sends its leaves' sums to
+    // the owners of the leaves above them, which add them in the order one process does.
+    std::vector<std::array<Sums, kNeighbours>> remote;
+    if (partitioned_ && comm_->distributed()) {
+        remote.assign(grid.leafCount(), {});
+        std::vector<Bytes> send(static_cast<std::size_t>(comm_->size()));
+        for (std::size_t i = 0; i < leaves.size(); ++i) {
+            const Vec3i from = leafOfNode(grid.leaf(leaves[i]).origin);
+            for (int d = 1; d < kNeighbours; ++d) {
+                const Vec3i to = from + Vec3i(neighbourStep(d, 0), neighbourStep(d, 1), neighbourStep(d, 2));
+                const int owner = ownerOf(to);
+                if (owner == comm_->rank()) continue;
+                Bytes& b = send[std::size_t(owner)];
+                putArray(b, to.data(), 3);
+                put(b, int32_t(d));
+                put(b, own[i].mass);
+                put(b, own[i].volume);
+            }
+        }
+        for (const Bytes& b : comm_->exchange(send)) {
+            ByteReader r{b};
+            while (!r.done()) {
+                Vec3i to;
+                r.getArray(to.data(), 3);
+                const int d = r.get<int32_t>();
+                Sums sums;
+                sums.mass = r.get<double>();
+                sums.volume = r.get<double>();
+                const uint32_t l = grid.indexOfLeaf(to);
+                if (l != SparseGrid::kNoLeaf) remote[l][std::size_t(d)] = sums;
+            }
+        }
+    }
+    std::vector<float>& cellMass = leafCellMass_[field];
+    cellMass.assign(grid.leafCount(), s.cellMass);
+    forEachLeafRange(grid.leafCount(), LeafGrain::Nodes, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t l = begin; l < end; ++l) {
+            double mass = 0.0, volume = 0.0;
+            for (int d = 0; d < kNeighbours; ++d) {
+                const uint32_t source = grid.sources(l)[std::size_t(d)];
+                const Sums& sums = source != SparseGrid::kNoLeaf ? own[source] : remote.empty() ? Sums{} : remote[l][std::size_t(d)];
+                mass += sums.mass, volume += sums.volume;
+            }
+            if (volume > 0.0) cellMass[l] = float(mass / volume * cell);
+        }
+    });
+    s.leafCellMass = cellMass.data();
     return s;
 }
 
@@ -420,7 +504,7 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     for (const auto& c : colliders_) c->prepare(state_.time + dt);
     const Vec3f g = settings_.gravity.cast<float>();
     const double tEnd = state_.time + dt;
-    const SurfaceContact surface = surfaceContact();
+    if (leafCellMass_.size() != fields_.size()) leafCellMass_.resize(fields_.size());
     const bool mirror = settings_.wallGhosts == WallGhosts::Mirror;
     const bool ranks = partitioned_ && comm_->distributed();
     const auto owned = [&](std::size_t f) { return ranks ? &rankLeaves_[f].owned : nullptr; };
@@ -452,11 +536,11 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     }
     GridUpdateResult out;
     if (fields_.size() == 1) {
-        out = updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surface, true, owned(0));
+        out = updateGridVelocities(fields_[0], colliders_, g, dt, tEnd, surfaceContact(0), true, owned(0));
     } else {
         // Bodies of their own: velocities in every field, then the contact between them, then the colliders.
         static const std::vector<std::unique_ptr<Collider>> kNone;
-        for (std::size_t f = 0; f < fields_.size(); ++f) updateGridVelocities(fields_[f], kNone, g, dt, tEnd, surface, true, owned(f));
+        for (std::size_t f = 0; f < fields_.size(); ++f) updateGridVelocities(fields_[f], kNone, g, dt, tEnd, SurfaceContact{}, true, owned(f));
         RemoteFields remote;
         if (ranks) {
             for (std::size_t f = 0; f < fields_.size(); ++f) remote.owned.push_back(owned(f));
@@ -470,7 +554,7 @@ GridUpdateResult Simulation::updateGrid(float dt) {
         }
         resolveFieldContact(fields_, settings_.contactFriction, ranks ? &remote : nullptr);
         for (std::size_t f = 0; f < fields_.size(); ++f) {
-            const GridUpdateResult r = updateGridVelocities(fields_[f], colliders_, g, dt, tEnd, surface, false, owned(f));
+            const GridUpdateResult r = updateGridVelocities(fields_[f], colliders_, g, dt, tEnd, surfaceContact(f), false, owned(f));
             out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
             out.work += r.work;
         }

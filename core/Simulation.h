@@ -252,7 +252,8 @@ private:
     void bin();
     GridUpdateResult updateGrid(float dt);
     /// The wall-contact test of this substep (none unless simulation.wall_contact is "surface").
-    SurfaceContact surfaceContact();
+    /// The `separate` walls' contact test for field f (SurfaceContact): the rest density of its leaves' material.
+    SurfaceContact surfaceContact(std::size_t field);
     /// P2G, G2P and the particle pass of the colliders, field by field.
     void scatter(float dt);
     G2PSummary gather(float dt);
@@ -279,6 +280,8 @@ private:
     std::vector<std::vector<int>> fieldSpecies_;     ///< per field, its species
     std::vector<AnySpecies> fieldScratch_;           ///< a field's species while its transfers run
     double restDensity_ = 0.0;                       ///< of all particles, for SurfaceContact
+    bool densitiesDiffer_ = false;                   ///< whether the species' rest densities differ
+    std::vector<std::vector<float>> leafCellMass_;   ///< per field and leaf, where they differ: rest density times dx^3
     /// Per species: whether it has particles anywhere (on any rank); particles are never removed, so this is
     /// set by emission and restore alone, on every rank alike.
     std::vector<uint8_t> populated_;

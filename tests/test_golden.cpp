@@ -100,7 +100,7 @@ const GoldenScene kScenes[] = {
                 { "name": "block", "material": "jelly", "shape": { "type": "box", "min": [-0.2, 0, -0.2], "max": [0.2, 0.15, 0.2] },
                   "start_frame": 1 } ],
       "colliders": [ { "type": "plane", "boundary": "separate", "friction": 0.4 } ] })",
-     4, 0, 0x768385c66ad70bcfull},
+     4, 0, 0x72d6a09e97b02446ull},
     {"retried_frame", R"({
       "simulation": { "dx": 0.05, "substeps": 1, "cfl": 5, "retries": 5 },
       "sets": [ { "material": "water", "material_params": { "bulk_modulus": 1e7 },
