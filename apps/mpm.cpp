@@ -147,7 +147,7 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
 int validate(const std::string& scenePath, bool strict) {
     const SceneDesc scene = loadScene(scenePath);
     const SceneBudget budget = estimateBudget(scene, true);
-    std::cout << scene.resolvedJson << "\n";
+    std::cout << resolvedWithDerived(scene, deriveValues(scene)) << "\n";
     std::fprintf(stderr, "%s", describeBudget(budget).c_str());
     checkBudget(scene, budget);
     const std::vector<std::string> warnings = sceneWarnings(scene);

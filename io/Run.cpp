@@ -122,7 +122,10 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
             events_.warning("took over the lock of " + dir_ + " from a run that is gone (" + lock_->takenOverFrom() + ")");
         removeStaleTemporaries();
     });
-    guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_, Comm::world()); });
+    DerivedValues derived;
+    guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_, Comm::world(), &derived); });
+    // From here the scene is the one that runs: every default stated, the pivots the builder derived included.
+    scene_.resolvedJson = resolvedWithDerived(scene_, derived);
     for (const Emitter& e : sim_->emitters()) {
         heldSamples_ += (long long)e.positions.size();
         setSamples_ += e.holdsPart() ? e.total : (long long)e.positions.size();

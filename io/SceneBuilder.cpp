@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <numeric>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -135,21 +136,26 @@ std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::st
     }
 }
 
-std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index) {
+/// Collider `index`; `pivot`, if given, receives the pivot its motion turns about (the scene's, or its centre).
+std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, Vec3d* pivot = nullptr) {
     const ColliderDesc& c = scene.colliders[index];
+    const auto motion = [&](const Vec3d& centre) {
+        if (pivot) *pivot = c.motion.pivotGiven ? c.motion.pivot : centre;
+        return motionOf(c.motion, centre, scene.settings.fps);
+    };
     const std::string where = "/colliders/" + std::to_string(index);
     if (const auto* v = std::get_if<VdbShape>(&c.shape); v && v->file.find("$F") != std::string::npos)
-        return sequenceCollider(scene, where, c, *v);
+        return motion(Vec3d::Zero()), sequenceCollider(scene, where, c, *v);
     return std::visit(
         [&]<class S>(const S& shape) -> std::unique_ptr<Collider> {
             if constexpr (kFromFile<S>) {
                 const auto ls = levelSetOf(scene, where, shape, true, c.inside);
                 Vec3d lo, hi;
                 ls->bounds(lo, hi);
-                return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction,
-                                                                         motionOf(c.motion, 0.5 * (lo + hi), scene.settings.fps), c.inside);
+                return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction, motion(0.5 * (lo + hi)),
+                                                                         c.inside);
             } else {
-                return analyticCollider(shape, c.boundary, c.friction, motionOf(c.motion, shape.middle(), scene.settings.fps), c.inside);
+                return analyticCollider(shape, c.boundary, c.friction, motion(shape.middle()), c.inside);
             }
         },
         c.shape);
@@ -288,6 +294,7 @@ static void addInitialVelocities(const SceneDesc& scene, std::size_t i, SetSampl
             }
         }
         for (std::size_t p = 0; p < n; ++p) out.velocities[p] += d.angularVelocity.cross(out.positions[p] - pivot).cast<float>();
+        out.pivot = pivot;
     }
     if (!d.velocityFile.empty()) {
         const std::string path = besideScene(scene, d.velocityFile);
@@ -471,8 +478,11 @@ SpeciesLayout speciesLayout(const SceneDesc& scene) {
     return out;
 }
 
-std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm) {
+std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm, DerivedValues* derived) {
     auto sim = std::make_unique<Simulation>(scene.settings);
+    DerivedValues found;
+    found.setPivot.resize(scene.sets.size());
+    found.colliderPivot.resize(scene.colliders.size());
     const SpeciesLayout layout = speciesLayout(scene);
     // Bodies, numbered in order of first appearance: a set's `body` name, or else its own name.
     std::vector<int> bodyOf;
@@ -509,6 +519,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
             continue;
         }
         SetSamples samples = sampleSet(scene, i, comm);
+        found.setPivot[i] = samples.pivot;
         e.positions = std::move(samples.positions);
         long long total = (long long)e.positions.size();
         if (comm.distributed()) {
@@ -539,8 +550,49 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         e.pauseFrames = d.pauseFrames;
         sim->addEmitter(std::move(e));
     }
-    for (std::size_t i = 0; i < scene.colliders.size(); ++i) sim->addCollider(colliderOf(scene, i));
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i) sim->addCollider(colliderOf(scene, i, &found.colliderPivot[i]));
+    if (derived) *derived = std::move(found);
     return sim;
+}
+
+DerivedValues deriveValues(const SceneDesc& scene) {
+    DerivedValues out;
+    for (std::size_t i = 0; i < scene.sets.size(); ++i) {
+        const ParticleSetDesc& d = scene.sets[i];
+        out.setPivot.push_back(d.angularVelocity.isZero() || d.continuous || isOutlet(d.shape) ? std::nullopt : sampleSet(scene, i).pivot);
+    }
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i) colliderOf(scene, i, &out.colliderPivot.emplace_back());
+    return out;
+}
+
+namespace {
+/// The object with `key` set to `value` where the reader writes it, before `next` (at the end if absent): the
+/// scene a run writes reads back to the same text.
+nlohmann::ordered_json withKey(const nlohmann::ordered_json& object, const char* key, const nlohmann::ordered_json& value, const char* next) {
+    nlohmann::ordered_json out = nlohmann::ordered_json::object();
+    for (auto it = object.begin(); it != object.end(); ++it) {
+        if (it.key() == next) out[key] = value;
+        if (it.key() != key) out[it.key()] = it.value();
+    }
+    if (!out.contains(key)) out[key] = value;
+    return out;
+}
+}  // namespace
+
+std::string resolvedWithDerived(const SceneDesc& scene, const DerivedValues& derived) {
+    nlohmann::ordered_json j = nlohmann::ordered_json::parse(scene.resolvedJson);
+    const auto array = [](const Vec3d& v) { return nlohmann::ordered_json::array({v[0], v[1], v[2]}); };
+    for (std::size_t i = 0; i < scene.sets.size() && i < derived.setPivot.size(); ++i)
+        if (derived.setPivot[i] && !scene.sets[i].pivotGiven) j["sets"][i] = withKey(j["sets"][i], "pivot", array(*derived.setPivot[i]), "velocity_field");
+    for (std::size_t i = 0; i < scene.colliders.size() && i < derived.colliderPivot.size(); ++i) {
+        const MotionDesc& m = scene.colliders[i].motion;
+        nlohmann::ordered_json& motion = j["colliders"][i]["motion"];
+        if (!m.pivotGiven) motion = withKey(motion, "pivot", array(derived.colliderPivot[i]), "keyframes");
+        for (std::size_t k = 0; k < m.keyframes.size(); ++k)
+            if (!m.keyframes[k].positionGiven)
+                motion["keyframes"][k] = withKey(motion["keyframes"][k], "position", array(derived.colliderPivot[i]), "rotation");
+    }
+    return j.dump(2);
 }
 
 }  // namespace mpm

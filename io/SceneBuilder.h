@@ -2,6 +2,7 @@
 // From a scene description to a ready-to-run Simulation: one species per particle set (its material with
 // the set's Lame scales), the set sampled in its shape as an emitter, and the colliders.
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,7 @@ struct SetSamples {
     double volume = 0.0;            ///< of the whole set
     std::vector<float> volumes;     ///< per particle, a point cloud's with radii; empty: volume shared evenly
     std::vector<float> masses;      ///< per particle, a point cloud's with masses or densities; empty: density x volume
+    std::optional<Vec3d> pivot;     ///< a spinning set's centre of spin (its centroid unless the scene gives one)
 };
 /// With several ranks each gets its part of the samples (in rank order, the whole set's order; `volume`
 /// stays the whole set's): a Poisson-disk set given by its density samples only its part's tiles.
@@ -49,9 +51,23 @@ void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo,
 inline constexpr long long kFewParticles = 100;
 std::vector<std::string> sceneWarnings(const SceneDesc& scene);
 
+/// The values the builder derives for keys a scene leaves to it (Key::derived): each collider's pivot (its
+/// centre) and so its keyframes' positions, and each spinning set's pivot (its centroid).
+struct DerivedValues {
+    std::vector<Vec3d> colliderPivot;               ///< by collider
+    std::vector<std::optional<Vec3d>> setPivot;     ///< by set; none for a set that does not spin
+};
+
 /// Builds the simulation the scene describes. Throws SceneError when a set's shape holds no particle. On
 /// several ranks each emitter holds its rank's part of the set's samples (Simulation::distribute then cuts
-/// the leaves from every rank's counts); collective on `comm`.
-std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm = Comm::single());
+/// the leaves from every rank's counts); collective on `comm`. `derived`, if given, receives what it derived.
+std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm = Comm::single(), DerivedValues* derived = nullptr);
+
+/// What buildSimulation would derive, without building it: the colliders are made and the spinning sets sampled.
+DerivedValues deriveValues(const SceneDesc& scene);
+
+/// The scene's resolved JSON with the derived values written in: the scene as it runs, every default stated.
+/// Running it gives the same bits as the scene it came from.
+std::string resolvedWithDerived(const SceneDesc& scene, const DerivedValues& derived);
 
 }  // namespace mpm

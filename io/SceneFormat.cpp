@@ -94,8 +94,8 @@ private:
         // A unit in parentheses is an explanation for error messages; the help text already says it.
         const bool showUnit = !k.unit.empty() && k.unit[0] != '(' && k.help.find(k.unit) == std::string_view::npos;
         const std::string unit = showUnit ? " [" + std::string(k.unit) + "]" : "";
-        out_ << "| " << prefix_ << k.name << " | " << (k.required ? "required" : def) << " | " << allowed << " | " << k.help << unit
-             << " |\n";
+        const std::string shown = k.required ? "required" : !k.byDefault.empty() ? std::string(k.byDefault) : def;
+        out_ << "| " << prefix_ << k.name << " | " << shown << " | " << allowed << " | " << k.help << unit << " |\n";
     }
     std::ostringstream& out_;
     std::string prefix_;
@@ -122,8 +122,10 @@ std::string explainSceneFormat() {
     out << "# Scene format\n\n"
            "A scene is one JSON object with the keys `simulation`, `output`, `sets` (required, at least one) and\n"
            "`colliders`. Units are SI (m, s, kg, Pa). **Y is up** (as in Houdini). Unknown keys are errors.\n"
-           "`mpm validate SCENE` prints the scene with every default filled in. This page is the output of\n"
-           "`mpm validate --explain`, generated from the same declarations the reader uses.\n";
+           "`mpm validate SCENE` prints the scene with every default filled in, and a run writes it as `scene.json`\n"
+           "beside its frames, with `scene_file`, the path of the scene it came from: assets are found beside that\n"
+           "file and the frames keep its name, so `mpm run DIR/scene.json` runs it again to the same bits. This page\n"
+           "is the output of `mpm validate --explain`, generated from the same declarations the reader uses.\n";
     SceneDesc defaults;
     defaults.output.directory = "out/<scene name>";
     out << "\n## simulation\n\n";

@@ -186,17 +186,22 @@ void outputKeys(V& v, OutputDesc& o) {
 /// The keys of a particle set itself; its `shape` and `material_params` are objects of their own.
 template <class V>
 void setKeys(V& v, ParticleSetDesc& d) {
-    v.text(Key{.name = "name", .help = "unique name (default set<i>)"}, d.name);
+    v.text(Key{.name = "name", .help = "unique name", .byDefault = "set<i>, i its index"}, d.name);
     v.choice(Key{.name = "material", .help = "material preset", .noun = "material"}, d.material, materialSceneNames());
-    v.text(Key{.name = "body", .help = "multi_field contact: sets with one body name share a velocity field (default: the set's own)"},
+    v.text(Key{.name = "body", .help = "multi_field contact: sets with one body name share a velocity field", .byDefault = "the set's own"},
            d.body);
     v.vec3(Key{.name = "velocity", .help = "initial velocity", .unit = "m/s"}, d.velocity);
     if (!v.given("color")) d.colour = defaultColour(d.material);
-    v.vec3(Key{.name = "color", .help = "colour of its points (Cd, linear RGB 0..1; default: the material's)"}, d.colour);
+    v.vec3(Key{.name = "color", .help = "colour of its points (Cd, linear RGB 0..1)", .byDefault = "the material's"}, d.colour);
     v.check(d.colour.minCoeff() >= 0.0f && d.colour.maxCoeff() <= 1.0f, "color", "components must lie in 0 .. 1");
     v.vec3(Key{.name = "angular_velocity", .help = "initial rigid spin about the pivot, added to velocity, right-handed", .unit = "rad/s"},
            d.angularVelocity);
-    v.vec3(Key{.name = "pivot", .help = "centre of the spin (default: the set's centroid)", .unit = "m"}, d.pivot);
+    v.vec3(Key{.name = "pivot",
+               .help = "centre of the spin; the resolved scene of a spinning set states the centroid it took",
+               .unit = "m",
+               .byDefault = "the set's centroid",
+               .derived = true},
+           d.pivot);
     d.pivotGiven = v.given("pivot");
     v.object(Key{.name = "velocity_field", .help = "an initial velocity field from a VDB, added to velocity"}, [&](auto& f) {
         f.text(Key{.name = "file", .help = "VDB file, relative to the scene file (empty: none)"}, d.velocityFile);
@@ -230,7 +235,7 @@ void setKeys(V& v, ParticleSetDesc& d) {
              d.lambdaScale);
     v.number(Key{.name = "mu_scale", .help = "scales the preset's mu", .lo = 0.0, .hi = 1e6}, d.muScale);
     v.number(Key{.name = "mass_scale", .help = "scales particle mass", .lo = 1e-6, .hi = 1e6}, d.massScale);
-    v.integer(Key{.name = "seed", .help = "sampling seed (default: set index + 1)", .lo = 0, .hi = 4294967295.0}, d.seed);
+    v.integer(Key{.name = "seed", .help = "sampling seed", .lo = 0, .hi = 4294967295.0, .byDefault = "set index + 1"}, d.seed);
 }
 
 /// A collider's motion: constant velocity and spin, or keyframed poses (core/Motion.h).
@@ -240,7 +245,11 @@ void motionKeys(V& v, MotionDesc& m) {
     v.vec3(Key{.name = "velocity", .help = "constant velocity", .unit = "m/s"}, m.velocity);
     v.vec3(Key{.name = "angular_velocity", .help = "constant angular velocity about the pivot, right-handed", .unit = "rad/s"},
            m.angularVelocity);
-    v.vec3(Key{.name = "pivot", .help = "the point it turns about, and whose position keyframes give; default: its centre", .unit = "m"},
+    v.vec3(Key{.name = "pivot",
+               .help = "the point it turns about, and whose position keyframes give; the resolved scene states the centre it took",
+               .unit = "m",
+               .byDefault = "the collider's centre (a file's: its level set's bounds')",
+               .derived = true},
            m.pivot);
     double previous = -std::numeric_limits<double>::infinity();
     v.list(Key{.name = "keyframes",
@@ -250,7 +259,8 @@ void motionKeys(V& v, MotionDesc& m) {
                key.positionGiven = k.given("position");
                k.number(Key{.name = "frame", .help = "frame of this pose (fractional frames allowed)", .lo = -1e9, .hi = 1e9, .required = true},
                         key.frame);
-               k.vec3(Key{.name = "position", .help = "where the pivot is; default: where it is at rest", .unit = "m"}, key.position);
+               k.vec3(Key{.name = "position", .help = "where the pivot is", .unit = "m", .byDefault = "the pivot's rest position", .derived = true},
+                      key.position);
                k.object(Key{.name = "rotation", .help = "turn from the rest placement about the pivot"},
                         [&](auto& r) { Rotation::keys(r, key.rotation); });
                std::ostringstream order;

@@ -111,6 +111,10 @@ public:
     template <class T>
     void vec3(const Key& k, Eigen::Matrix<T, 3, 1>& value) {
         Vec3d v = value.template cast<double>();
+        if (k.derived && !given(k.name)) {
+            take(k);
+            return;
+        }
         if (const json* j = take(k)) {
             if (!j->is_array() || j->size() != 3) fail(k.name, "expected a list of 3 numbers, got " + quoted(*j));
             for (int i = 0; i < 3; ++i) {
@@ -165,6 +169,15 @@ public:
     bool given(std::string_view key) const { return in_.contains(key); }
     template <class F>
     void object(const Key& k, F&& f) {
+        if (k.derived && !given(k.name)) {
+            // Read for its defaults, left out of the resolved scene.
+            static const json empty = json::object();
+            json unused = json::object();
+            take(k);
+            JsonKeys c(empty, unused, path_ + "/" + std::string(k.name), file_);
+            f(c);
+            return;
+        }
         JsonKeys c = child(std::string(k.name).c_str());
         f(c);
         c.finish();
@@ -297,6 +310,16 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
         throw SceneError(path + ": not valid JSON: a number is out of range (at most about 1.8e308): " + withoutPrefix(e.what()));
     } catch (const json::exception& e) {
         throw SceneError(path + ": not valid JSON: " + withoutPrefix(e.what()));
+    }
+    // The scene a run wrote (its scene.json) names the file it was resolved from: its assets are found beside that
+    // file and its frames keep that scene's name, so it runs again as it is, from anywhere.
+    if (doc.is_object() && doc.contains("scene_file")) {
+        const json& source = doc["scene_file"];
+        if (!source.is_string() || source.get<std::string>().empty())
+            throw SceneError(path + ": /scene_file: expected the path of the scene this one was resolved from, got " + quoted(source));
+        scene.file = source.get<std::string>();
+        scene.name = std::filesystem::path(scene.file).stem().string();
+        doc.erase("scene_file");
     }
     json resolved = json::object();
     JsonKeys root(doc, resolved, "", path);

@@ -43,6 +43,11 @@ struct Key {
     std::string_view unit = "";
     bool required = false;
     std::string_view noun = "value";  ///< what a choice picks, for "unknown <noun>" messages
+    /// A default that is no constant ("its centre", "the material's"): the documentation shows this instead.
+    std::string_view byDefault = "";
+    /// Not given, its value is derived when the scene is built (from a shape's bounds, from the particles): the
+    /// resolved scene leaves it out until the builder writes the value it derived (io/SceneBuilder.h).
+    bool derived = false;
 };
 
 /// A name for one value of an enumeration.

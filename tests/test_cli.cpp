@@ -6,7 +6,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
+
+#include "io/SceneBuilder.h"
+#include "io/SceneReader.h"
+#include "tests/ProgramRuns.h"
+#include "tests/TestAssets.h"
 
 namespace fs = std::filesystem;
 
@@ -132,4 +138,62 @@ TEST(Cli, UnstableFrameIsRetriedWithHalfTheStepWhenAsked) {
     int retries = 0;
     while (std::getline(csv, line)) retries += column(line, "retries");
     EXPECT_GE(retries, 1);
+}
+
+namespace {
+/// The resolved scene of `path` with what the builder derives written in: what validate prints and a run writes.
+std::string resolvedOf(const std::string& path) {
+    const mpm::SceneDesc scene = mpm::loadScene(path);
+    return mpm::resolvedWithDerived(scene, mpm::deriveValues(scene));
+}
+}  // namespace
+
+TEST(Cli, TheResolvedSceneOfEveryShippedSceneReadsBackToItself) {
+    // Every default stated as the engine applies it: the resolved scene, read again from another folder (its
+    // scene_file pointing home), resolves to the same text. A key the reader wrote as a default it did not use
+    // (a box's centre beside its corners, a collider's pivot, a rectangle's axis) would differ.
+    const fs::path out = fs::temp_directory_path() / ("mpm_cli_resolved_" + std::to_string(::getpid()));
+    fs::create_directories(out);
+    int scenes = 0;
+    for (const auto& e : fs::recursive_directory_iterator(std::string(MPM_SOURCE_DIR) + "/scenes")) {
+        if (!e.is_regular_file() || e.path().extension() != ".json") continue;
+        const std::string first = resolvedOf(e.path().string());
+        nlohmann::ordered_json j = nlohmann::ordered_json::parse(first);
+        j["scene_file"] = e.path().string();
+        const std::string again = (out / "scene.json").string();
+        std::ofstream(again) << j.dump(2);
+        EXPECT_EQ(resolvedOf(again), first) << e.path();
+        ++scenes;
+    }
+    EXPECT_GE(scenes, 20);
+}
+
+TEST(Cli, TheSceneARunWritesRunsAgainToTheSameBits) {
+    // A keyframed gate without a pivot (it turns about its centre), a spinning set (about its centroid), a box by
+    // corners and a turned one by centre and size, a mesh found beside the scene: `mpm run OUT/scene.json`, from
+    // another folder, writes the frames the scene wrote, bit for bit, under the scene's name.
+    const fs::path dir = fs::temp_directory_path() / ("mpm_cli_rerun_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir / "scene");
+    std::ofstream((dir / "scene" / "cup.obj").string()) << mpm::test::cupObj(0.1, 0.1, 0.01);
+    const std::string scene = (dir / "scene" / "gate.json").string();
+    std::ofstream(scene) << R"({"simulation": {"frames": 4, "dx": 0.02},
+        "output": {"ply": true, "surface": false},
+        "sets": [{"material": "water", "shape": {"type": "box", "min": [-0.3, 0.0, -0.1], "max": [-0.1, 0.2, 0.1]}},
+                 {"material": "jelly", "angular_velocity": [0, 0, 3], "shape": {"type": "box", "center": [0.3, 0.3, 0], "size": [0.1, 0.1, 0.1],
+                  "rotation": {"axis": [1, 1, 0], "degrees": 30}}}],
+        "colliders": [{"type": "plane"},
+                      {"type": "box", "min": [-0.06, 0.0, -0.2], "max": [-0.04, 0.3, 0.2], "boundary": "sticky",
+                       "motion": {"keyframes": [{"frame": 0}, {"frame": 4, "rotation": {"axis": [0, 0, 1], "degrees": -60}}]}},
+                      {"type": "mesh", "file": "cup.obj", "transform": {"translate": [0.3, 0.0, 0.0]}}]})";
+    const Result first = runMpm("run " + scene + " -o " + (dir / "a").string() + " --quiet");
+    ASSERT_EQ(first.code, 0) << first.output;
+    // The gate's pivot is stated as the centre it turned about.
+    const nlohmann::ordered_json written = nlohmann::ordered_json::parse(std::ifstream((dir / "a" / "scene.json").string()));
+    EXPECT_EQ(written["colliders"][1]["motion"]["pivot"], nlohmann::ordered_json::parse("[-0.05, 0.15, 0.0]"));
+    EXPECT_EQ(written["colliders"][1]["motion"]["keyframes"][1]["position"], nlohmann::ordered_json::parse("[-0.05, 0.15, 0.0]"));
+    EXPECT_TRUE(written["sets"][1].contains("pivot"));
+    const Result again = runMpm("run " + (dir / "a" / "scene.json").string() + " -o " + (dir / "b").string() + " --quiet");
+    ASSERT_EQ(again.code, 0) << again.output;
+    mpm::test::expectSameOutput((dir / "a").string(), (dir / "b").string(), "gate", 8);
 }

@@ -22,11 +22,14 @@ struct Box {
         const bool corners = !v.given("center") && !v.given("size");
         Vec3d centre = 0.5 * (s.min + s.max), size = s.max - s.min;
         Rotation rotation;
-        v.vec3(Key{.name = "min", .help = "lowest corner (or give center and size)", .unit = "m", .required = corners}, s.min);
-        v.vec3(Key{.name = "max", .help = "highest corner", .unit = "m", .required = corners}, s.max);
-        v.vec3(Key{.name = "center", .help = "centre, instead of min and max", .unit = "m"}, centre);
-        v.vec3(Key{.name = "size", .help = "edge lengths, with center", .unit = "m"}, size);
-        v.object(Key{.name = "rotation", .help = "turn about the centre, with center and size"}, [&](auto& r) { Rotation::keys(r, rotation); });
+        // The resolved scene states the form given: the other one's keys are derived from it.
+        v.vec3(Key{.name = "min", .help = "lowest corner (or give center and size)", .unit = "m", .required = corners, .derived = !corners}, s.min);
+        v.vec3(Key{.name = "max", .help = "highest corner", .unit = "m", .required = corners, .derived = !corners}, s.max);
+        v.vec3(Key{.name = "center", .help = "centre, instead of min and max", .unit = "m", .byDefault = "from min and max", .derived = corners},
+               centre);
+        v.vec3(Key{.name = "size", .help = "edge lengths, with center", .unit = "m", .byDefault = "from min and max", .derived = corners}, size);
+        v.object(Key{.name = "rotation", .help = "turn about the centre, with center and size", .derived = corners},
+                 [&](auto& r) { Rotation::keys(r, rotation); });
         v.check(!(v.given("center") != v.given("size")), v.given("center") ? "size" : "center", "give center and size together");
         v.check(!v.given("rotation") || !corners, "rotation", "a rotated box is given by center and size");
         if (!corners) {

@@ -21,12 +21,13 @@ struct Rectangle {
     static void keys(V& v, Rectangle& s) {
         v.vec3(Key{.name = "center", .help = "centre", .unit = "m", .required = true}, s.centre);
         v.vec3(Key{.name = "normal", .help = "the direction material flows out of it"}, s.normal);
-        v.vec3(Key{.name = "axis", .help = "the direction of the width side (default X, or Z for a normal along X)"}, s.axis);
+        v.check(s.normal.norm() >= kTiny, "normal", "must not be the zero vector");
+        // Decided before the axis is read, so that the resolved scene states the axis taken.
+        if (!v.given("axis") && s.normal.norm() >= kTiny && std::abs(s.normal.normalized().x()) > 0.9) s.axis = Vec3d::UnitZ();
+        v.vec3(Key{.name = "axis", .help = "the direction of the width side", .byDefault = "X, or Z for a normal along X"}, s.axis);
         v.number(Key{.name = "width", .help = "side along axis", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true}, s.width);
         v.number(Key{.name = "height", .help = "side along normal x axis", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true},
                  s.height);
-        v.check(s.normal.norm() >= kTiny, "normal", "must not be the zero vector");
-        if (!v.given("axis") && std::abs(s.normal.normalized().x()) > 0.9) s.axis = Vec3d::UnitZ();
         v.check((s.axis - s.axis.dot(s.normal.normalized()) * s.normal.normalized()).norm() >= kTiny * std::max(1.0, s.axis.norm()),
                 "axis", "must not be parallel to the normal");
     }
