@@ -48,7 +48,7 @@ struct SimulationSettings {
     ContactModel contact = ContactModel::SingleField;
     float contactFriction = 0.0f;  ///< Coulomb mu between bodies (multi_field)
     WallGhosts wallGhosts = WallGhosts::Held;
-    WallContact wallContact = WallContact::Surface;  ///< for `separate` colliders (sticky and slip hold from the stencil's reach)
+    WallContact wallContact = WallContact::Stencil;  ///< for `separate` colliders (sticky and slip hold from the stencil's reach)
 
     /// Ranks re-cut the leaves into equal shares of particles when the most loaded holds more than this much
     /// above the mean (simulation.rebalance_imbalance; docs/distributed.md has the measurement); results do

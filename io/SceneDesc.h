@@ -59,7 +59,7 @@ struct MotionDesc {
 
 struct ColliderDesc {
     ColliderShape shape;
-    Boundary boundary = Boundary::Slip;
+    Boundary boundary = Boundary::Separate;
     float friction = 0.0f;
     bool inside = false;  ///< material stays inside it (a tank, a glass, a drum)
     MotionDesc motion;

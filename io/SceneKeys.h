@@ -77,9 +77,10 @@ void simulationKeys(V& v, SceneDesc& d) {
                  .noun = "wall ghosts"},
              s.wallGhosts, std::span<const Named<WallGhosts>>(kWallGhosts));
     v.choice(Key{.name = "wall_contact",
-                 .help = "where `separate` colliders act: surface (once the material's surface, judged from the node's mass, reaches "
-                         "theirs) or stencil (on every node inside them, from 1.5 cells before the material arrives); sticky and slip "
-                         "colliders hold material from the stencil's reach",
+                 .help = "where `separate` colliders act: stencil (on every node inside them, as sticky and slip colliders do: a "
+                         "body arriving feels the wall from 1.5 cells away) or surface (once the material's surface, judged from the "
+                         "node's mass, reaches theirs: contact times as Hertz's, but material resting in a corner or against a wall "
+                         "below a free surface creeps into the wall, a water column a quarter cell a side, see docs/method.md)",
                  .noun = "wall contact"},
              s.wallContact, std::span<const Named<WallContact>>(kWallContacts));
     v.flag(Key{.name = "adaptive", .help = "apply the CFL bound (off: the fixed target dt)"}, s.adaptive);
@@ -276,7 +277,8 @@ void motionKeys(V& v, MotionDesc& m) {
 template <class V>
 void colliderKeys(V& v, ColliderDesc& c) {
     v.choice(Key{.name = "boundary",
-                 .help = "sticky: stop; slip: remove normal velocity; separate: remove it only when moving in",
+                 .help = "separate: remove the normal velocity only when moving in (material leaves a wall it is not pressed "
+                         "against); slip: remove it both ways (holds material on the wall, in tension too); sticky: stop",
                  .noun = "boundary"},
              c.boundary, std::span<const Named<Boundary>>(kBoundaries));
     v.number(Key{.name = "friction", .help = "Coulomb coefficient (slip and separate)", .lo = 0.0, .hi = 100.0}, c.friction);

@@ -67,7 +67,7 @@ const GoldenScene kScenes[] = {
       "sets": [ { "material": "water", "shape": { "type": "box", "min": [0, 0, 0], "max": [0.3, 0.5, 0.3] }, "seed": 3 } ],
       "colliders": [ { "type": "plane", "boundary": "slip", "friction": 0.3 },
                      { "type": "plane", "point": [0, 0, 0], "normal": [1, 0, 0], "boundary": "separate" } ] })",
-     1, 20, 0x49ac079b2215e762ull},
+     1, 20, 0xfeaae1a08c475515ull},
     {"jelly_cubic_sphere", R"({
       "simulation": { "dx": 0.05, "substeps": 5, "interpolation": "cubic" },
       "sets": [ { "material": "jelly", "shape": { "type": "box", "min": [-0.15, 0.3, -0.15], "max": [0.15, 0.6, 0.15] },
@@ -75,7 +75,7 @@ const GoldenScene kScenes[] = {
       "colliders": [ { "type": "sphere", "center": [0, 0, 0], "radius": 0.25, "boundary": "sticky" } ] })",
      1, 20, 0xe04e65b737f84fdfull},
     {"rubber_mls", R"({
-      "simulation": { "dx": 0.05, "substeps": 5, "force": "mls" },
+      "simulation": { "dx": 0.05, "substeps": 5, "force": "mls", "wall_contact": "surface" },
       "sets": [ { "material": "rubber", "shape": { "type": "sphere", "center": [0, 0.2, 0], "radius": 0.15 },
                   "velocity": [0, -3, 0], "mu_scale": 2 } ],
       "colliders": [ { "type": "plane", "boundary": "separate", "friction": 0.5 } ] })",
@@ -94,7 +94,7 @@ const GoldenScene kScenes[] = {
       "colliders": [ { "type": "plane", "boundary": "sticky" } ] })",
      1, 20, 0x35bf4fe41dbc78f1ull},
     {"emitter_two_species", R"({
-      "simulation": { "dx": 0.05, "substeps": 4 },
+      "simulation": { "dx": 0.05, "substeps": 4, "wall_contact": "surface" },
       "sets": [ { "name": "stream", "material": "water", "shape": { "type": "sphere", "center": [0, 0.5, 0], "radius": 0.08 },
                   "velocity": [1, -1, 0], "duration": 4, "pause": 1, "count": 300 },
                 { "name": "block", "material": "jelly", "shape": { "type": "box", "min": [-0.2, 0, -0.2], "max": [0.2, 0.15, 0.2] },
@@ -105,7 +105,7 @@ const GoldenScene kScenes[] = {
       "simulation": { "dx": 0.05, "substeps": 1, "cfl": 5, "retries": 5 },
       "sets": [ { "material": "water", "material_params": { "bulk_modulus": 1e7 },
                   "shape": { "type": "box", "min": [0, 0, 0], "max": [0.3, 0.3, 0.3] } } ],
-      "colliders": [ { "type": "plane" } ] })",
+      "colliders": [ { "type": "plane", "boundary": "slip" } ] })",
      1, 0, 0x7a54cd288a14e75full},
 };
 
