@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -59,13 +60,42 @@ void FrameWriter::configure(const SceneDesc& scene) {
     particleSpacing_ = scene.settings.dx / std::cbrt(particlesPerCell);
 }
 
-FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar)
+std::map<int, std::string> statsRows(const std::string& csv) {
+    std::map<int, std::string> rows;
+    std::istringstream in(csv);
+    std::string line;
+    std::getline(in, line);  // the header
+    while (std::getline(in, line)) {
+        try {
+            rows[std::stoi(line.substr(0, line.find(',')))] = line;
+        } catch (const std::exception&) {
+            // Not a row of ours: nothing to keep.
+        }
+    }
+    return rows;
+}
+
+void FrameWriter::writeStats() {
+    if (kept_.empty()) {
+        writeTextAtomically(dir_ + "/stats.csv", csv_);
+        return;
+    }
+    std::map<int, std::string> rows = statsRows(csv_);
+    for (const auto& [frame, row] : kept_) rows[frame] = row;
+    std::string text = FrameStats::csvHeader() + "\n";
+    for (const auto& [frame, row] : rows) text += row + "\n";
+    writeTextAtomically(dir_ + "/stats.csv", text);
+}
+
+FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar,
+                         std::map<int, std::string> kept)
     : FrameWriter(scene, layout, directory, -1) {
+    kept_ = std::move(kept);
     std::error_code ec;
     std::filesystem::create_directories(dir_, ec);
     if (ec) throw WriteError(dir_, "cannot create the output directory: " + ec.message());
     csv_ = statsSoFar.empty() ? FrameStats::csvHeader() + "\n" : statsSoFar;
-    writeTextAtomically(dir_ + "/stats.csv", csv_);
+    writeStats();
     // The resolved scene, and where it came from: its asset paths are relative to that file (the render
     // tool finds the colliders' meshes through it). Not part of the scene's identity.
     nlohmann::ordered_json resolved = nlohmann::ordered_json::parse(scene.resolvedJson);
@@ -84,7 +114,7 @@ std::string FrameWriter::framePath(int frame, const char* suffix, const char* ex
 
 void FrameWriter::recordStats(const FrameStats& stats) {
     csv_ += stats.csvRow() + "\n";
-    writeTextAtomically(dir_ + "/stats.csv", csv_);
+    writeStats();
 }
 
 void FrameWriter::writeFrame(int frame, const Simulation& sim, const FrameStats& stats) {

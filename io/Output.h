@@ -1,6 +1,7 @@
 #pragma once
 // Everything a run writes into its output directory: per-frame VDB (and optionally PLY) files,
 // stats.csv (one row per frame) and scene.json (the resolved scene). All files are written atomically.
+#include <map>
 #include <string>
 #include <vector>
 
@@ -17,7 +18,10 @@ public:
     /// Writes scene.json and stats.csv (starting from statsSoFar, a resumed run's rows, or the header alone) into
     /// the directory, made if need be. Removes nothing: clearing an earlier run is the caller's decision (io/Run.h).
     /// Keeps its own copy of what it needs of the scene.
-    FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar = "");
+    /// `kept`: rows of an earlier stats.csv (by frame) that stay as they are, in the file beside the rows written
+    /// (a run of part of a scene, --frames, replaces only its own frames' rows).
+    FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar = "",
+                std::map<int, std::string> kept = {});
     /// A writer of rank `part`'s part files (output.rank_files = "per_rank"): frames only, no stats.csv or
     /// scene.json (rank 0's ordinary writer keeps those).
     static FrameWriter partWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, int part);
@@ -44,10 +48,16 @@ private:
     double particleSpacing_ = 0.0;  ///< what the surface resolves
     std::string dir_;
     std::string csv_;
+    std::map<int, std::string> kept_;
     double lastWrite_ = 0;
     int part_ = -1;  ///< the rank whose part files this writes; -1: whole frames
     FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, int part);
     void configure(const SceneDesc& scene);
+    /// Writes stats.csv: the rows written, with the kept rows in place of theirs and after them.
+    void writeStats();
 };
+
+/// The rows of a stats.csv by frame, the header left out (an empty map for a missing or empty file).
+std::map<int, std::string> statsRows(const std::string& csv);
 
 }  // namespace mpm

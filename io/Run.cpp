@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <filesystem>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <random>
 #include <regex>
@@ -97,6 +98,12 @@ std::string firstError(const Comm& comm, const std::string& error) {
     return std::string(reinterpret_cast<const char*>(b.data()), b.size());
 }
 
+/// A text file's content; empty when it cannot be read (a run's first stats.csv).
+std::string readTextFile(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
 /// Rank 0 alone: the output directory is its to write.
 template <class F>
 void onRoot(const Comm& comm, F&& fn) {
@@ -110,6 +117,10 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     // Budgets before work: a scene that cannot run here fails now, with the estimate and what to change.
     checkBudget(scene_, estimateBudget(scene_, false, Comm::world().size()));
     last_ = options_.lastFrame < 0 ? scene_.frames : options_.lastFrame;
+    if (options_.framesGiven && (last_ > scene_.frames || options_.firstFrame > scene_.frames))
+        throw SceneError(scene_.file + ": --frames " + std::to_string(options_.firstFrame) + ":" + std::to_string(last_) + ": the scene has " +
+                         std::to_string(scene_.frames) + " frames (simulation.frames); ask for frames within 1:" + std::to_string(scene_.frames) +
+                         ", or raise simulation.frames");
     dir_ = options_.outDir.empty() ? scene_.output.directory : options_.outDir;
     // On several ranks (mpirun) rank 0 alone owns the directory: it takes the lock and writes every file.
     const Comm& comm = Comm::world();
@@ -134,7 +145,14 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     identity_ = sceneIdentity(scene_.resolvedJson);
     hash_ = sceneHash(identity_);
     chooseStart();
-    onRoot(comm, [&] { writer_ = std::make_unique<FrameWriter>(scene_, layout_, dir_, statsSoFar_); });
+    onRoot(comm, [&] {
+        // Part of a scene (--frames A:B): the rows of the other frames stay as the earlier runs wrote them.
+        std::map<int, std::string> kept;
+        if (options_.framesGiven)
+            for (auto& [frame, row] : statsRows(readTextFile(dir_ + "/stats.csv")))
+                if (frame < options_.firstFrame || frame > last_) kept[frame] = std::move(row);
+        writer_ = std::make_unique<FrameWriter>(scene_, layout_, dir_, statsSoFar_, std::move(kept));
+    });
     if (comm.distributed() && scene_.output.rankFiles == "per_rank")
         partWriter_ = std::make_unique<FrameWriter>(FrameWriter::partWriter(scene_, layout_, dir_, comm.rank()));
     if (start_ == 0) writeFrame(0, sim_->measure(), options_.firstFrame == 0 && scene_.output.initialFrame);
@@ -372,6 +390,17 @@ CheckpointInfo SceneRun::checkpointInfo(const SimState& s, bool withStats) const
     return info;
 }
 
+bool SceneRun::supersededCheckpoint(int frame) const {
+    // Only a run of part of a scene (--frames) can find newer checkpoints than its own: those of the frames after
+    // its range. A checkpoint that the kept count would rotate away at once is not written.
+    if (!options_.framesGiven) return false;
+    int newer = 0;
+    onRoot(Comm::world(), [&] {
+        for (const CheckpointFiles& files : listCheckpoints(dir_, scene_.name)) newer += files.frame > frame;
+    });
+    return Comm::world().max(float(newer)) >= float(scene_.output.checkpointsKept);
+}
+
 void SceneRun::writeCheckpointFiles(const SimState& s) {
     const std::string path = checkpointPath(dir_, scene_.name, s.frame);
     writeCheckpoint(path, checkpointInfo(s, true), s);
@@ -416,7 +445,7 @@ void SceneRun::run(const std::atomic<int>* stop) {
         }
         guarded("writing frame " + std::to_string(f), [&] { writeFrame(f, st, f >= options_.firstFrame); });
         // On a stop request a checkpoint is written even when the scene asks for none.
-        const bool saved = every > 0 && (f % every == 0 || f == last_);
+        const bool saved = every > 0 && (f % every == 0 || f == last_) && !supersededCheckpoint(f);
         if (saved) guarded("writing the checkpoint of frame " + std::to_string(f), [&] { saveCheckpoint(); });
         const FrameWriter* wrote = partWriter_ ? partWriter_.get() : writer_.get();
         events_.frameDone(f, last_, st, f >= options_.firstFrame && wrote ? wrote->lastWriteSeconds() : 0.0);

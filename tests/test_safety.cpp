@@ -20,6 +20,7 @@
 #include <thread>
 
 #include "io/Checkpoint.h"
+#include "io/Output.h"
 #include "io/SceneBuilder.h"
 #include "io/SceneReader.h"
 #include "io/VdbWriter.h"
@@ -169,6 +170,29 @@ TEST(Safety, FramesAToBDeleteNothingElseAndStartFromACheckpoint) {
         EXPECT_TRUE(fs::exists(dir + "/out" + name)) << name;  // nothing before 14 deleted
     }
     EXPECT_EQ(vdbWithoutUuid(dir + "/out/flow_0014.vdb"), vdbWithoutUuid(dir + "/ref/flow_0014.vdb"));
+    // A range in the middle: every other frame, every other stats row (wall times included) and the newest
+    // checkpoints stay as they were; the range's rows are replaced in place.
+    const std::string statsBefore = readFile(dir + "/out/stats.csv");
+    const std::string frame9 = readFile(dir + "/out/flow_0009.vdb");
+    const Result middle = runMpm({"run", scene, "-o", dir + "/out", "--frames", "5:6", "--quiet"}, dir);
+    ASSERT_EQ(middle.code, 0) << middle.output;
+    const std::map<int, std::string> before = statsRows(statsBefore), after = statsRows(readFile(dir + "/out/stats.csv"));
+    ASSERT_EQ(after.size(), 15u);
+    const std::map<int, std::string> ref = statsRows(statsWithoutWallTime(dir + "/ref/stats.csv"));
+    for (const auto& [frame, row] : after) {
+        if (frame == 5 || frame == 6) EXPECT_EQ(row.substr(0, row.rfind(',')), ref.at(frame)) << frame;
+        else EXPECT_EQ(row, before.at(frame)) << frame;
+    }
+    EXPECT_EQ(readFile(dir + "/out/flow_0009.vdb"), frame9);
+    std::vector<std::string> checkpoints;
+    for (const auto& e : fs::directory_iterator(dir + "/out"))
+        if (e.path().extension() == ".mpmc") checkpoints.push_back(e.path().filename().string());
+    std::sort(checkpoints.begin(), checkpoints.end());
+    EXPECT_EQ(checkpoints, (std::vector<std::string>{"flow_checkpoint_0013.mpmc", "flow_checkpoint_0014.mpmc"}));
+    // A range past the scene's end is refused, naming the scene's frames.
+    const Result past = runMpm({"run", scene, "-o", dir + "/out", "--frames", "14:15"}, dir);
+    EXPECT_EQ(past.code, 2);
+    EXPECT_NE(past.output.find("--frames 14:15: the scene has 14 frames"), std::string::npos) << past.output;
 }
 
 TEST(Safety, OneRunPerDirectoryAndNoOtherScenesFramesRemoved) {
