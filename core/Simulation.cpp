@@ -14,6 +14,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "core/FloatingPoint.h"
 #include "core/GridUpdate.h"
 #include "core/MultiField.h"
 
@@ -175,21 +176,23 @@ std::size_t Simulation::particleCount() const {
 std::size_t Simulation::totalParticleCount() const { return std::size_t(comm_->sum((long long)particleCount())); }
 
 void Simulation::emitDue() {
-    if (state_.emittedFrame == state_.frame) return;
-    state_.emittedFrame = state_.frame;
-    for (Emitter& e : emitters_) {
-        if (!e.emitsAt(state_.frame)) continue;
-        if (e.holdsPart()) emitPart(e);
-        else addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
-        // Emitted for the last time: its samples (24 bytes a particle and more, on every rank) are not needed again.
-        if (state_.frame == e.lastEmission()) {
-            std::vector<Vec3d>().swap(e.positions);
-            std::vector<Vec3f>().swap(e.velocities);
-            std::vector<float>().swap(e.masses);
-            std::vector<float>().swap(e.volumes);
-            e.released = true;
+    return withSubnormalsFlushed([&] {
+        if (state_.emittedFrame == state_.frame) return;
+        state_.emittedFrame = state_.frame;
+        for (Emitter& e : emitters_) {
+            if (!e.emitsAt(state_.frame)) continue;
+            if (e.holdsPart()) emitPart(e);
+            else addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
+            // Emitted for the last time: its samples (24 bytes a particle and more, on every rank) are not needed again.
+            if (state_.frame == e.lastEmission()) {
+                std::vector<Vec3d>().swap(e.positions);
+                std::vector<Vec3f>().swap(e.velocities);
+                std::vector<float>().swap(e.masses);
+                std::vector<float>().swap(e.volumes);
+                e.released = true;
+            }
         }
-    }
+    });
 }
 
 double Simulation::cflTimeStep() const {
@@ -683,53 +686,55 @@ ProjectionSummary Simulation::holdOutOfColliders(float dt) {
 }
 
 double Simulation::substep(double dtMax) {
-    // Bin particles by leaf; allocate the leaves their stencils reach and release the others.
-    bin();
-    PhaseClock clock;
-    // Time step: the caller's bound (target and frame end), and the CFL condition (halved on retries).
-    double dt = std::min(dtMax, cflTimeStep() * guard_.stepScale());
-    // On ranks a phase books its exchanges as communication itself; the phase keeps the rest of its time.
-    const auto lap = [&](double& phase, double communicationBefore) {
-        clock.lap(phase);
-        phase -= phases_.communication - communicationBefore;
-    };
-    // P2G: mass and momentum, with the stress impulse of this step folded in (thesis 3.14, 3.15, 3.24).
-    double before = phases_.communication;
-    scatter(float(dt));
-    lap(phases_.p2g, before);
-    // Grid update: v = mv/m, gravity, colliders and friction (3.20, 3.26, section 5).
-    before = phases_.communication;
-    GridUpdateResult gridUpdate = updateGrid(float(dt));
-    lap(phases_.grid, before);
-    // Thesis pseudocode 3: if a node would move more than maxDisplacement cells, redo with a shorter step.
-    if (settings_.maxDisplacement > 0.0 && gridUpdate.maxSpeed * dt > settings_.maxDisplacement * settings_.dx) {
-        dt = settings_.maxDisplacement * settings_.dx / gridUpdate.maxSpeed;
-        before = phases_.communication;
+    return withSubnormalsFlushed([&] {
+        // Bin particles by leaf; allocate the leaves their stencils reach and release the others.
+        bin();
+        PhaseClock clock;
+        // Time step: the caller's bound (target and frame end), and the CFL condition (halved on retries).
+        double dt = std::min(dtMax, cflTimeStep() * guard_.stepScale());
+        // On ranks a phase books its exchanges as communication itself; the phase keeps the rest of its time.
+        const auto lap = [&](double& phase, double communicationBefore) {
+            clock.lap(phase);
+            phase -= phases_.communication - communicationBefore;
+        };
+        // P2G: mass and momentum, with the stress impulse of this step folded in (thesis 3.14, 3.15, 3.24).
+        double before = phases_.communication;
         scatter(float(dt));
         lap(phases_.p2g, before);
+        // Grid update: v = mv/m, gravity, colliders and friction (3.20, 3.26, section 5).
         before = phases_.communication;
-        gridUpdate = updateGrid(float(dt));
+        GridUpdateResult gridUpdate = updateGrid(float(dt));
         lap(phases_.grid, before);
-    }
-    // G2P: velocity, affine velocity, deformation update with return mapping, advection (3.17-3.19, 3.21).
-    const G2PSummary g2p = gather(float(dt));
-    // Particles found inside a collider (walls thinner than a cell included) go back to its surface.
-    const ProjectionSummary held = holdOutOfColliders(float(dt));
-    clock.lap(phases_.g2p);
-    // Work moving colliders did is external: the energy check counts it.
-    ExactSum work = gridUpdate.work;
-    work += held.work;
-    state_.energy.work += work.value();
-    // The bounds the next step starts from, then the blow-up checks: a non-finite value, a particle that
-    // outran its stencil, a CFL step that collapsed.
-    const double cflBefore = cflTimeStep();
-    state_.bounds = StepBounds{std::max(g2p.maxSpeed, held.maxSpeed), g2p.minStiffnessKey};
-    guard_.checkSubstep(state_, g2p, dt, settings_.dx, cflBefore, cflTimeStep());
-    emitStreams(state_.time, state_.time + dt);
-    state_.time += dt;
-    ++state_.substeps;
-    clock.lap(phases_.other);
-    return dt;
+        // Thesis pseudocode 3: if a node would move more than maxDisplacement cells, redo with a shorter step.
+        if (settings_.maxDisplacement > 0.0 && gridUpdate.maxSpeed * dt > settings_.maxDisplacement * settings_.dx) {
+            dt = settings_.maxDisplacement * settings_.dx / gridUpdate.maxSpeed;
+            before = phases_.communication;
+            scatter(float(dt));
+            lap(phases_.p2g, before);
+            before = phases_.communication;
+            gridUpdate = updateGrid(float(dt));
+            lap(phases_.grid, before);
+        }
+        // G2P: velocity, affine velocity, deformation update with return mapping, advection (3.17-3.19, 3.21).
+        const G2PSummary g2p = gather(float(dt));
+        // Particles found inside a collider (walls thinner than a cell included) go back to its surface.
+        const ProjectionSummary held = holdOutOfColliders(float(dt));
+        clock.lap(phases_.g2p);
+        // Work moving colliders did is external: the energy check counts it.
+        ExactSum work = gridUpdate.work;
+        work += held.work;
+        state_.energy.work += work.value();
+        // The bounds the next step starts from, then the blow-up checks: a non-finite value, a particle that
+        // outran its stencil, a CFL step that collapsed.
+        const double cflBefore = cflTimeStep();
+        state_.bounds = StepBounds{std::max(g2p.maxSpeed, held.maxSpeed), g2p.minStiffnessKey};
+        guard_.checkSubstep(state_, g2p, dt, settings_.dx, cflBefore, cflTimeStep());
+        emitStreams(state_.time, state_.time + dt);
+        state_.time += dt;
+        ++state_.substeps;
+        clock.lap(phases_.other);
+        return dt;
+    });
 }
 
 void Simulation::emitStreams(double t0, double t1) {
@@ -792,58 +797,62 @@ void Simulation::runFrameSubsteps() {
 }
 
 FrameStats Simulation::advanceFrame() {
-    const auto start = std::chrono::steady_clock::now();
-    emitDue();
-    if (!state_.energy.set) guard_.resetEnergyReference(state_.energy, measure());
-    FrameStats st;
-    const int retries = guard_.withRetries(state_, [&] {
-        runFrameSubsteps();
-        st = measure();
-        guard_.checkEnergy(state_, st);
+    return withSubnormalsFlushed([&] {
+        const auto start = std::chrono::steady_clock::now();
+        emitDue();
+        if (!state_.energy.set) guard_.resetEnergyReference(state_.energy, measure());
+        FrameStats st;
+        const int retries = guard_.withRetries(state_, [&] {
+            runFrameSubsteps();
+            st = measure();
+            guard_.checkEnergy(state_, st);
+        });
+        const int steps = state_.frameSubsteps;
+        state_.frameSubsteps = 0;
+        ++state_.frame;
+        checkCoordinates();
+        const int32_t before = state_.nextId;
+        emitDue();
+        if (state_.nextId != before) {
+            // New material brings its own energy: measure again and restart the growth reference.
+            st = measure();
+            guard_.resetEnergyReference(state_.energy, st);
+        }
+        st.frame = state_.frame;
+        st.substeps = steps;
+        st.retries = retries;
+        st.stepDt = lastBound_.dt;
+        st.stepLimit = lastBound_.limit;
+        st.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return st;
     });
-    const int steps = state_.frameSubsteps;
-    state_.frameSubsteps = 0;
-    ++state_.frame;
-    checkCoordinates();
-    const int32_t before = state_.nextId;
-    emitDue();
-    if (state_.nextId != before) {
-        // New material brings its own energy: measure again and restart the growth reference.
-        st = measure();
-        guard_.resetEnergyReference(state_.energy, st);
-    }
-    st.frame = state_.frame;
-    st.substeps = steps;
-    st.retries = retries;
-    st.stepDt = lastBound_.dt;
-    st.stepLimit = lastBound_.limit;
-    st.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return st;
 }
 
 FrameStats Simulation::measure() const {
-    ParticleSums sums = sumParticles(state_.species, settings_.dx, kernelInertiaScale(), settings_.gravity);
-    std::size_t leaves = 0;
-    for (const SparseGrid& field : fields_) leaves += field.leafCount();
-    if (comm_->distributed()) {
-        for (ExactSum& e : sums.sum) comm_->sum(e);
-        sums.maxSpeed = comm_->max(sums.maxSpeed);
-        sums.minJ = comm_->min(sums.minJ);
-        sums.maxJ = comm_->max(sums.maxJ);
-        sums.particles = std::size_t(comm_->sum((long long)sums.particles));
-        // A leaf counts once, on its owner (the others hold it as a ghost).
-        if (partitioned_) {
-            leaves = 0;
-            for (const RankLeaves& f : rankLeaves_) leaves += std::size_t(std::count(f.owned.begin(), f.owned.end(), uint8_t(1)));
+    return withSubnormalsFlushed([&] {
+        ParticleSums sums = sumParticles(state_.species, settings_.dx, kernelInertiaScale(), settings_.gravity);
+        std::size_t leaves = 0;
+        for (const SparseGrid& field : fields_) leaves += field.leafCount();
+        if (comm_->distributed()) {
+            for (ExactSum& e : sums.sum) comm_->sum(e);
+            sums.maxSpeed = comm_->max(sums.maxSpeed);
+            sums.minJ = comm_->min(sums.minJ);
+            sums.maxJ = comm_->max(sums.maxJ);
+            sums.particles = std::size_t(comm_->sum((long long)sums.particles));
+            // A leaf counts once, on its owner (the others hold it as a ghost).
+            if (partitioned_) {
+                leaves = 0;
+                for (const RankLeaves& f : rankLeaves_) leaves += std::size_t(std::count(f.owned.begin(), f.owned.end(), uint8_t(1)));
+            }
+            leaves = std::size_t(comm_->sum((long long)leaves));
         }
-        leaves = std::size_t(comm_->sum((long long)leaves));
-    }
-    FrameStats st = sums.stats();
-    st.frame = state_.frame;
-    st.time = state_.time;
-    st.activeLeaves = leaves;
-    st.gridBytes = leaves * SparseGrid::bytesPerLeaf();
-    return st;
+        FrameStats st = sums.stats();
+        st.frame = state_.frame;
+        st.time = state_.time;
+        st.activeLeaves = leaves;
+        st.gridBytes = leaves * SparseGrid::bytesPerLeaf();
+        return st;
+    });
 }
 
 
