@@ -62,7 +62,7 @@ RunOptions parseFrames(const std::string& text, RunOptions o) {
         o.firstFrame = colon == 0 ? 0 : std::stoi(text.substr(0, colon));
         o.lastFrame = colon + 1 == text.size() ? -1 : std::stoi(text.substr(colon + 1));
     } catch (const std::exception&) {
-        throw SceneError("--frames: expected A:B with whole numbers (for example 0:48), got \"" + text + "\"");
+        throw SceneError("--frames: expected A:B with whole numbers, frames counted from 1 as files are (for example 1:48), got \"" + text + "\"");
     }
     if (o.firstFrame < 0 || (o.lastFrame >= 0 && o.lastFrame < o.firstFrame))
         throw SceneError("--frames: need 0 <= A <= B, got \"" + text + "\"");
@@ -144,10 +144,11 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
     return kExitOk;
 }
 
-int validate(const std::string& scenePath, bool strict) {
+int validate(const std::string& scenePath, bool strict, bool printScene) {
     const SceneDesc scene = loadScene(scenePath);
     const SceneBudget budget = estimateBudget(scene, true);
-    std::cout << resolvedWithDerived(scene, deriveValues(scene)) << "\n";
+    // The summary first; the scene with every default stated (what a run writes as scene.json) when asked for.
+    if (printScene) std::cout << resolvedWithDerived(scene, deriveValues(scene)) << "\n";
     std::fprintf(stderr, "%s", describeBudget(budget).c_str());
     checkBudget(scene, budget);
     const std::vector<std::string> warnings = sceneWarnings(scene);
@@ -191,6 +192,7 @@ int fail(int code, const char* format, const char* what, bool everyRank = true) 
 
 int cli(int argc, char** argv) {
     CLI::App app{"Sparse-grid Material Point Method simulator (OpenVDB grid, APIC, oneTBB)"};
+    app.set_version_flag("--version", std::string("sparse-mpm ") + MPM_VERSION + " (" + MPM_BUILD_OPTIONS + ")");
     app.require_subcommand(1);
     std::string scenePath, outDir, frames;
     int threads = 0;
@@ -199,7 +201,9 @@ int cli(int argc, char** argv) {
     CLI::App* runCmd = app.add_subcommand("run", "simulate a scene and write its frames");
     runCmd->add_option("scene", scenePath, "scene file (JSON)")->required();
     runCmd->add_option("-o,--output", outDir, "output directory (default: the scene's output.directory)");
-    runCmd->add_option("--threads", threads, "worker threads (default: the scene's, else all cores)")->check(CLI::NonNegativeNumber);
+    constexpr int kMostThreads = 4096;  // as simulation.threads allows
+    runCmd->add_option("--threads", threads, "worker threads, 0 .. 4096 (default: the scene's, else all cores)")
+        ->check(CLI::Range(0, kMostThreads).description("0 .. 4096"));
     runCmd->add_option("--frames", frames,
                        "write only frames A:B (nothing else is deleted; starts from a checkpoint before A when there is one)");
     runCmd->add_flag("--resume", resume, "continue from the newest valid checkpoint in the output directory");
@@ -209,8 +213,10 @@ int cli(int argc, char** argv) {
     CLI::App* validateCmd = app.add_subcommand("validate", "check a scene, print it with every default filled in and what it will cost");
     validateCmd->add_option("scene", scenePath, "scene file (JSON)");
     validateCmd->add_flag("--explain", explain, "list every scene field, its default and allowed values");
-    bool strict = false;
+    bool strict = false, printScene = false;
     validateCmd->add_flag("--strict", strict, "exit 2 on warnings too (a tiny set, a set inside a collider, overlapping sets)");
+    validateCmd->add_flag("--print-scene", printScene,
+                          "print the scene with every default stated (as a run writes it to scene.json) on standard output");
 
     try {
         app.parse(argc, argv);
@@ -225,7 +231,7 @@ int cli(int argc, char** argv) {
                 return kExitOk;
             }
             if (scenePath.empty()) throw SceneError("validate: give a scene file, or --explain");
-            return validate(scenePath, strict);
+            return validate(scenePath, strict, printScene);
         }
         RunOptions options;
         options.outDir = outDir;

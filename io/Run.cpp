@@ -127,7 +127,7 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     onRoot(comm, [&] {
         std::error_code ec;
         fs::create_directories(dir_, ec);
-        if (ec) throw WriteError(dir_, "cannot create the output directory: " + ec.message());
+        if (ec) throw SceneError(dir_ + ": cannot create the output directory: " + ec.message() + "; choose another with -o");
         lock_ = std::make_unique<DirectoryLock>(dir_);
         if (!lock_->takenOverFrom().empty())
             events_.warning("took over the lock of " + dir_ + " from a run that is gone (" + lock_->takenOverFrom() + ")");

@@ -122,10 +122,11 @@ std::string explainSceneFormat() {
     out << "# Scene format\n\n"
            "A scene is one JSON object with the keys `simulation`, `output`, `sets` (required, at least one) and\n"
            "`colliders`. Units are SI (m, s, kg, Pa). **Y is up** (as in Houdini). Unknown keys are errors.\n"
-           "`mpm validate SCENE` prints the scene with every default filled in, and a run writes it as `scene.json`\n"
-           "beside its frames, with `scene_file`, the path of the scene it came from: assets are found beside that\n"
-           "file and the frames keep its name, so `mpm run DIR/scene.json` runs it again to the same bits. This page\n"
-           "is the output of `mpm validate --explain`, generated from the same declarations the reader uses.\n";
+           "`mpm validate --print-scene SCENE` prints the scene with every default stated, as a run writes it to\n"
+           "`scene.json` beside its frames, with `scene_file`, the path of the scene it came from: assets are found\n"
+           "beside that file and the frames keep its name, so `mpm run DIR/scene.json` runs it again to the same\n"
+           "bits. This page is the output of `mpm validate --explain`, generated from the same declarations the\n"
+           "reader uses.\n";
     SceneDesc defaults;
     defaults.output.directory = "out/<scene name>";
     out << "\n## simulation\n\n";

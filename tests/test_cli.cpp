@@ -197,3 +197,25 @@ TEST(Cli, TheSceneARunWritesRunsAgainToTheSameBits) {
     ASSERT_EQ(again.code, 0) << again.output;
     mpm::test::expectSameOutput((dir / "a").string(), (dir / "b").string(), "gate", 8);
 }
+
+TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
+    const Result version = runMpm("--version");
+    EXPECT_EQ(version.code, 0);
+    EXPECT_NE(version.output.find("sparse-mpm "), std::string::npos) << version.output;
+    EXPECT_NE(version.output.find("OpenVDB"), std::string::npos) << version.output;
+    const std::string scene = sceneFile("small.json", R"({"simulation": {"frames": 2, "dx": 0.05}, "output": {"surface": false},
+        "sets": [{"shape": {"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}}]})");
+    const Result threads = runMpm("run " + scene + " --threads abc");
+    EXPECT_EQ(threads.code, 2);
+    EXPECT_LT(threads.output.size(), 200u) << threads.output;  // no 300-digit range
+    const Result frames = runMpm("run " + scene + " --frames x");
+    EXPECT_EQ(frames.code, 2);
+    EXPECT_NE(frames.output.find("(for example 1:48)"), std::string::npos) << frames.output;
+    const Result unwritable = runMpm("run " + scene + " -o " + scene + "/out");  // under a file
+    EXPECT_EQ(unwritable.code, 2);
+    EXPECT_NE(unwritable.output.find("cannot create the output directory"), std::string::npos) << unwritable.output;
+    // validate: the summary, and the scene only when asked for.
+    const Result plain = runMpm("validate " + scene), printed = runMpm("validate --print-scene " + scene);
+    EXPECT_EQ(plain.output.find("\"simulation\""), std::string::npos) << plain.output;
+    EXPECT_NE(printed.output.find("\"simulation\""), std::string::npos) << printed.output;
+}
