@@ -8,6 +8,7 @@
 #include <limits>
 #include <random>
 #include <regex>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "io/AtomicFile.h"
@@ -131,6 +132,7 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
         lock_ = std::make_unique<DirectoryLock>(dir_);
         if (!lock_->takenOverFrom().empty())
             events_.warning("took over the lock of " + dir_ + " from a run that is gone (" + lock_->takenOverFrom() + ")");
+        refuseAnotherScenesDirectory();
         removeStaleTemporaries();
     });
     DerivedValues derived;
@@ -198,6 +200,24 @@ void SceneRun::guarded(const std::string& what, F&& f) {
             << b.memoryBytes / double(1u << 30) << " GiB at its peak; this machine has " << b.machineBytes / double(1u << 30) << " GiB)";
         throw LimitExceeded(msg.str());
     }
+}
+
+void SceneRun::refuseAnotherScenesDirectory() const {
+    // Scene names can extend one another (dam, dam_points: dam's split points files are named as dam_points's
+    // frames), and stats.csv and scene.json are the directory's: two scenes cannot share one without one touching
+    // the other's files. The scene.json of the run before says whose the directory is.
+    const std::string record = dir_ + "/scene.json";
+    std::error_code ec;
+    if (!fs::exists(record, ec)) return;
+    std::string owner;
+    try {
+        owner = fs::path(nlohmann::json::parse(readTextFile(record)).value("scene_file", std::string())).stem().string();
+    } catch (const std::exception&) {
+        return;  // not a record of ours: nothing of a scene to protect
+    }
+    if (owner.empty() || owner == scene_.name) return;
+    throw SceneError(dir_ + ": holds the frames of scene \"" + owner + "\" (its scene.json); an output directory holds one scene's " +
+                     "frames, stats.csv and scene.json: give scene \"" + scene_.name + "\" a directory of its own with -o");
 }
 
 void SceneRun::removeStaleTemporaries() {

@@ -70,6 +70,7 @@ private:
     bool readCheckpointOf(const CheckpointFiles& files, Checkpoint& c, bool& share, std::string& path);
     void saveCheckpoint();
     /// Rank 0's part of saveCheckpoint: the file, and the older ones removed.
+    void refuseAnotherScenesDirectory() const;
     bool supersededCheckpoint(int frame) const;
     void writeCheckpointFiles(const SimState& state);
     /// output.rank_files = "per_rank" on several ranks: each rank writes its part of the set, nothing gathered.

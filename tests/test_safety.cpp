@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -221,6 +222,24 @@ TEST(Safety, OneRunPerDirectoryAndNoOtherScenesFramesRemoved) {
     EXPECT_FALSE(fs::exists(dir + "/out/dam_0003.vdb.tmp999999"));
 }
 
+TEST(Safety, ASceneWhoseNameExtendsAnothersCannotRunIntoItsDirectory) {
+    // dam's split points files would be named as dam_points's frames, and the two would share stats.csv and
+    // scene.json: the run of one into the other's directory is refused, and nothing of the other's changes.
+    const std::string dir = tempDir("clash");
+    const std::string points = writeFile(dir + "/dam_points.json", kScene), dam = writeFile(dir + "/dam.json", kScene);
+    ASSERT_EQ(runMpm({"run", points, "-o", dir + "/out", "--quiet", "--frames", "0:2"}, dir).code, 0);
+    std::map<std::string, std::string> before;
+    for (const auto& e : fs::directory_iterator(dir + "/out")) before[e.path().filename().string()] = readFile(e.path().string());
+    for (const std::string& scene : {dam, dam}) {  // and again: a refused run leaves nothing that lets the next one in
+        const Result r = runMpm({"run", scene, "-o", dir + "/out", "--quiet"}, dir);
+        EXPECT_EQ(r.code, 2);
+        EXPECT_NE(r.output.find("holds the frames of scene \"dam_points\""), std::string::npos) << r.output;
+    }
+    std::map<std::string, std::string> after;
+    for (const auto& e : fs::directory_iterator(dir + "/out")) after[e.path().filename().string()] = readFile(e.path().string());
+    EXPECT_EQ(after, before);
+}
+
 TEST(Safety, AFullDiskFailsNamingTheFileAndKeepsEveryFrameWhole) {
     if (::geteuid() != 0) GTEST_SKIP() << "mounting a small tmpfs needs root; run the suite as root to check a full disk";
     const std::string dir = tempDir("full");
@@ -298,7 +317,7 @@ TEST(Safety, HostileScenesGetANamedErrorAndExitTwo) {
     EXPECT_EQ(d.code, 2);
     EXPECT_NE(d.output.find(dir + ": is a directory, not a scene file"), std::string::npos) << d.output;
     // 1e6 is an integer.
-    const Result ok = runMpm({"validate", writeFile(dir + "/ok.json", waterScene(R"("frames": 1e2, "dx": 0.05)", box))}, dir);
+    const Result ok = runMpm({"validate", "--print-scene", writeFile(dir + "/ok.json", waterScene(R"("frames": 1e2, "dx": 0.05)", box))}, dir);
     EXPECT_EQ(ok.code, 0) << ok.output;
     EXPECT_NE(ok.output.find("\"frames\": 100"), std::string::npos) << ok.output;
 }
