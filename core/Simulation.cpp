@@ -216,9 +216,23 @@ double Simulation::cflTimeStep() const {
     return denominator > 0.0 ? 2.0 * reach / denominator : std::numeric_limits<double>::infinity();
 }
 
+double Simulation::displacementTimeStep() const {
+    const double speed = double(state_.bounds.maxSpeed);
+    return settings_.maxDisplacement > 0.0 && speed > 0.0 ? settings_.maxDisplacement * settings_.dx / speed
+                                                           : std::numeric_limits<double>::infinity();
+}
+
 Simulation::StepBound Simulation::stepBound(bool withCause) const {
     const double target = settings_.targetDt(), cfl = cflTimeStep() * guard_.stepScale();
+    const double displacement = displacementTimeStep() * guard_.stepScale();
     const std::string retry = guard_.stepScale() < 1.0 ? " (retry)" : "";
+    if (displacement < std::min(target, cfl)) {
+        if (!withCause) return {displacement, "", "max_displacement" + retry};
+        std::ostringstream cause;
+        cause << "the displacement rule, simulation.max_displacement = " << settings_.maxDisplacement
+              << " cells a substep at the fastest particle's |v| = " << state_.bounds.maxSpeed << " m/s";
+        return {displacement, cause.str(), "max_displacement" + retry};
+    }
     if (target <= cfl) return {target, withCause ? "the target step 1 / (fps * substeps)" : "", "target" + retry};
     // The fastest wave of the species present, against the fastest particle.
     float c = 0.0f;
@@ -771,7 +785,9 @@ void Simulation::runFrameSubsteps() {
         const bool stopAsked = stop_ && stop_->load(std::memory_order_relaxed) != 0;
         if (comm_->max(stopAsked ? 1.0f : 0.0f) > 0.0f) throw Interrupted();
         const double remaining = frameEnd - state_.time;
-        const double dtMax = std::min(settings_.targetDt(), cflTimeStep()) * guard_.stepScale();
+        // The displacement rule too, so that the frame is cut into substeps it will take (a substep whose nodes
+        // still move too far is redone shorter).
+        const double dtMax = std::min({settings_.targetDt(), cflTimeStep(), displacementTimeStep()}) * guard_.stepScale();
         // Split the rest of the frame into equal substeps so that the last one lands on the frame time.
         const double pieces = std::max(1.0, std::ceil(remaining / dtMax - kFrameSplitSlack));
         // Watchdog: a frame that would take more substeps than allowed stops here, saying what bounds the step.

@@ -145,6 +145,8 @@ public:
     /// dt (c + |v|max + |g| dt) <= C dx, i.e. C dx / (c + |v|max) without gravity: c from the stiffest
     /// species, |v|max from the last G2P, |g| dt the speed gravity adds during the step.
     double cflTimeStep() const;
+    /// The thesis's displacement rule at the fastest particle: max_displacement cells a substep (infinite when off).
+    double displacementTimeStep() const;
     /// What bounds the next step: its length and, in words, which rule set it (the target, or the CFL bound
     /// from which species' wave speed or the fastest particle).
     struct StepBound {

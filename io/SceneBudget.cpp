@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "io/Sampling.h"
@@ -129,8 +130,15 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
     const double speed = double(c) + double(vmax), g = st.gravity.norm(), reach = st.cfl * dx;
     const double cfl = 2.0 * reach / (speed + std::sqrt(speed * speed + 4.0 * g * reach));
     b.dt = st.adaptive ? std::min(target, cfl) : target;
+    // The thesis's displacement rule binds at any setting of adaptive, once anything moves.
+    const double displacement = st.maxDisplacement > 0.0 && vmax > 0.0f ? st.maxDisplacement * dx / double(vmax)
+                                                                        : std::numeric_limits<double>::infinity();
     std::ostringstream cause;
-    if (!st.adaptive || target <= cfl) cause << "the target step 1 / (fps * substeps)";
+    if (displacement < b.dt) {
+        b.dt = displacement;
+        cause << "the displacement rule, simulation.max_displacement = " << st.maxDisplacement << " cells a substep at the initial speed "
+              << vmax << " m/s";
+    } else if (!st.adaptive || target <= cfl) cause << "the target step 1 / (fps * substeps)";
     else if (c >= vmax) cause << "the CFL bound from the wave speed " << c << " m/s of set " << stiffest;
     else cause << "the CFL bound from the initial speed " << vmax << " m/s";
     b.stepCause = cause.str();

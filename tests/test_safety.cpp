@@ -338,6 +338,27 @@ TEST(Safety, AFrameThatWouldExceedTheSubstepLimitStopsTheRunWithItsCause) {
     EXPECT_NE(r.output.find("the limit is simulation.max_substeps_per_frame = 40"), std::string::npos) << r.output;
 }
 
+TEST(Safety, TheDisplacementRuleIsInTheEstimateAndNamedWhenItExceedsTheLimit) {
+    // v = 10 m/s with max_displacement 0.01 cells: 2e-5 s a substep, about 2,084 a frame; the estimate counts it
+    // (it said 41, from the CFL bound alone), the run takes as many, and the watchdog names the rule.
+    const std::string dir = tempDir("displacement");
+    auto scene = [&](const std::string& extra) {
+        return writeFile(dir + "/fast.json", R"({"simulation": {"frames": 1, "dx": 0.02, "max_displacement": 0.01,
+            "gravity": [0, 0, 0])" + extra + R"(}, "output": {"surface": false, "points": false},
+            "sets": [{"material": "jelly", "velocity": [10, 0, 0], "shape": {"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}}]})");
+    };
+    const Result estimate = runMpm({"validate", scene("")}, dir);
+    EXPECT_EQ(estimate.code, 0) << estimate.output;
+    EXPECT_NE(estimate.output.find("about 2084 at the start (dt = 2e-05 s, set by the displacement rule"), std::string::npos) << estimate.output;
+    ASSERT_EQ(runMpm({"run", scene(""), "-o", dir + "/out", "--quiet"}, dir).code, 0);
+    const std::map<int, std::string> rows = statsRows(readFile(dir + "/out/stats.csv"));
+    EXPECT_NE(rows.at(1).find(",2084,"), std::string::npos) << rows.at(1);  // substeps taken: the estimate's
+    EXPECT_NE(rows.at(1).find("max_displacement"), std::string::npos) << rows.at(1);
+    const Result refused = runMpm({"validate", scene(R"(, "max_substeps_per_frame": 1000)")}, dir);
+    EXPECT_EQ(refused.code, 2);
+    EXPECT_NE(refused.output.find("set by the displacement rule"), std::string::npos) << refused.output;
+}
+
 TEST(Safety, SetNamesWithCommasSurviveTheMetadata) {
     const std::string dir = tempDir("names");
     const std::string scene = writeFile(dir + "/names.json", R"({
