@@ -58,6 +58,25 @@ LevelSet::LevelSet(std::shared_ptr<const Grid> grid, double reach) : grid_(std::
 
 LevelSet::~LevelSet() = default;
 
+void LevelSet::insideBounds(Vec3d& lo, Vec3d& hi) const {
+    // The outermost inside voxels border the surface, so they lie in the band: the active values suffice.
+    const openvdb::FloatGrid& g = *grid_->grid;
+    openvdb::CoordBBox box;
+    for (auto it = g.tree().cbeginValueOn(); it; ++it)
+        if (*it <= 0.0f) {
+            openvdb::CoordBBox b;
+            it.getBoundingBox(b);
+            box.expand(b);
+        }
+    lo = Vec3d::Constant(INFINITY), hi = Vec3d::Constant(-INFINITY);
+    if (box.empty()) return;
+    for (int c = 0; c < 8; ++c) {
+        const openvdb::Vec3d p = g.indexToWorld(openvdb::Vec3d((c & 1) ? box.max().x() : box.min().x(), (c & 2) ? box.max().y() : box.min().y(),
+                                                               (c & 4) ? box.max().z() : box.min().z()));
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+    }
+}
+
 struct LevelSet::Sampler::Impl {
     const openvdb::FloatGrid& grid;
     openvdb::FloatGrid::ConstAccessor acc;

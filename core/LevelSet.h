@@ -42,6 +42,9 @@ public:
         lo = lo_;
         hi = hi_;
     }
+    /// World box of the voxel centres at or inside the surface (phi <= 0): its middle is the solid's centre,
+    /// whatever band the field has on either side (an empty box, lo > hi, where nothing is inside).
+    void insideBounds(Vec3d& lo, Vec3d& hi) const;
     const Grid& grid() const { return *grid_; }
 
 private:

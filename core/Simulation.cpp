@@ -112,8 +112,16 @@ void Simulation::emitPart(const Emitter& e) {
     state_.nextId += int32_t(e.total);
     const std::size_t before = particlesOf(state_.species.at(std::size_t(e.species))).size();
     appendParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes, ids);
+    setAffine(e, before);
     state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, fastest);
     if (partitioned_) sendEmittedToOwners(e.species, before);
+}
+
+void Simulation::setAffine(const Emitter& e, std::size_t from) {
+    // PIC keeps no affine velocity: its particles start without one, as they go on.
+    if (e.affine.isZero() || settings_.transfer.transfer != TransferScheme::APIC) return;
+    ParticleArrays& P = particlesOf(state_.species.at(std::size_t(e.species)));
+    std::fill(P.C.begin() + std::ptrdiff_t(from), P.C.end(), e.affine);
 }
 
 void Simulation::appendParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
@@ -181,8 +189,13 @@ void Simulation::emitDue() {
         state_.emittedFrame = state_.frame;
         for (Emitter& e : emitters_) {
             if (!e.emitsAt(state_.frame)) continue;
-            if (e.holdsPart()) emitPart(e);
-            else addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
+            if (e.holdsPart()) {
+                emitPart(e);
+            } else {
+                const std::size_t before = particlesOf(state_.species.at(std::size_t(e.species))).size();
+                addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
+                setAffine(e, before);
+            }
             // Emitted for the last time: its samples (24 bytes a particle and more, on every rank) are not needed again.
             if (state_.frame == e.lastEmission()) {
                 std::vector<Vec3d>().swap(e.positions);

@@ -65,6 +65,10 @@ struct Emitter {
     std::vector<Vec3d> positions;
     Vec3f velocity = Vec3f::Zero();
     std::vector<Vec3f> velocities;  ///< per particle, added to `velocity` (a point cloud's); empty: none
+    /// The set's velocity gradient: its particles' APIC affine velocity C. A set spinning at w about a pivot moves
+    /// as v = w x (x - pivot), whose gradient is [w]x: without it C starts at zero and the first transfer loses the
+    /// spin's share that C carries (a sphere spun at 10 rad/s turned at 9.53).
+    Mat3f affine = Mat3f::Zero();
     float mass = 0.0f, volume = 0.0f;  ///< per particle
     std::vector<float> masses, volumes;  ///< particle by particle (a point cloud's), instead of mass, volume; empty: none
     int startFrame = 0;
@@ -263,6 +267,8 @@ private:
     template <class S>
     void permute(S& species, const std::vector<uint32_t>& destination);
     /// addParticles' second half: appends the particles (already those this rank keeps) with the given ids.
+    /// Gives the particles of emitter e appended from index `from` of its species its affine velocity.
+    void setAffine(const Emitter& e, std::size_t from);
     void appendParticles(int species, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
                          const std::vector<Vec3f>& perParticle, const std::vector<float>& masses, const std::vector<float>& volumes,
                          const std::vector<int32_t>& ids);

@@ -106,9 +106,16 @@ openvdb::GridBase::Ptr readVdbGrid(const std::string& path, const std::string& g
         openvdb::io::File file(path);
         file.open();
         if (!file.hasGrid(gridName)) {
+            // OpenVDB lists an unnamed grid as "[i]", i its place among the unnamed ones: worth saying, or it reads as no name at all.
             std::string names;
-            for (auto it = file.beginName(); it != file.endName(); ++it) names += (names.empty() ? "" : ", ") + *it;
-            throw LevelSetError(path + ": no grid \"" + gridName + "\" (grids: " + (names.empty() ? "none" : names) + ")");
+            bool unnamed = false;
+            for (auto it = file.beginName(); it != file.endName(); ++it) {
+                const std::string name = *it;
+                names += (names.empty() ? "\"" : ", \"") + name + "\"";
+                unnamed = unnamed || (!name.empty() && name.front() == '[');
+            }
+            throw LevelSetError(path + ": no grid \"" + gridName + "\" (the file holds " + (names.empty() ? "no grids" : names) +
+                                (unnamed ? "; \"[0]\" is a grid without a name, and \"grid\": \"[0]\" reads it" : "") + ")");
         }
         openvdb::GridBase::Ptr base = file.readGrid(gridName);
         file.close();

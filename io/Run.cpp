@@ -137,6 +137,7 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     });
     DerivedValues derived;
     guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_, Comm::world(), &derived); });
+    for (const std::string& w : derived.warnings) events_.warning(w);
     // From here the scene is the one that runs: every default stated, the pivots the builder derived included.
     scene_.resolvedJson = resolvedWithDerived(scene_, derived);
     for (const Emitter& e : sim_->emitters()) {

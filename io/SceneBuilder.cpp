@@ -74,12 +74,41 @@ MeshField meshField(const SceneDesc& scene, const std::string& where, const Mesh
     return f;
 }
 
+/// "FILE: /colliders/i/file: ... walls as thin as ...": a mesh collider whose field's voxel is too coarse for its
+/// thinnest wall (material passes through it).
+std::string thinWallWarning(const SceneDesc& scene, const std::string& where, const MeshShape& mesh, const MeshField& f) {
+    std::ostringstream w;
+    w.precision(3);
+    w << scene.file << ": " << where << "/file: " << mesh.file << " has walls as thin as " << f.wall.thinnest << " m";
+    if (f.wall.triangle >= 0) w << " (at " << f.wall.where[0] << ", " << f.wall.where[1] << ", " << f.wall.where[2] << ")";
+    w << "; its distance field's voxel of " << f.voxel << " m" << (mesh.voxelSize > 0.0 ? "" : " (the finest picked by itself, dx/8)")
+      << " resolves walls down to " << kVoxelsAcrossWall * f.voxel << " m, and material passes through thinner ones: set voxel_size to "
+      << f.wall.thinnest / kVoxelsAcrossWall << " or less";
+    return w.str();
+}
+
+/// What building a collider's field found: the centre its motion turns about unless the scene names a pivot, the
+/// voxel it chose, and a warning about walls thinner than that voxel resolves (empty: none).
+struct FieldNotes {
+    Vec3d centre = Vec3d::Zero();
+    double voxel = 0.0;
+    std::string warning;
+};
+
 /// The level set of a file shape, built or read once: placed by its transform (a collider), or in the file's
 /// own coordinates (`placed` false: a set, sampled there and then placed).
 std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const MeshShape& m, bool place = true,
-                                           bool solidOutside = false) {
+                                           bool solidOutside = false, FieldNotes* notes = nullptr) {
     const double dx = scene.settings.dx / (place ? 1.0 : m.transform.scale);
     const MeshField f = meshField(scene, where, m, place, solidOutside);
+    if (notes) {
+        // The centre of the mesh's own box: exact, where the field's box is rounded to voxels and wider by its band.
+        Vec3d lo = Vec3d::Constant(INFINITY), hi = Vec3d::Constant(-INFINITY);
+        for (const Vec3d& p : f.mesh.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+        notes->centre = 0.5 * (lo + hi);
+        notes->voxel = f.voxel;
+        if (place && !resolves(f.voxel, f.wall.thinnest)) notes->warning = thinWallWarning(scene, where, m, f);
+    }
     // Outside the band reaches past a leaf's half diagonal of the skip test where it can; inside, levelSetBand.
     constexpr double kExteriorCells = 2.0;
     try {
@@ -91,10 +120,19 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
 }
 
 std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v, bool place = true,
-                                           bool = false) {
+                                           bool = false, FieldNotes* notes = nullptr) {
     try {
-        return vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx), place ? v.transform : Placement{},
-                           place ? levelSetBand(scene.settings.dx) : 0.0);
+        auto ls = vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx), place ? v.transform : Placement{},
+                              place ? levelSetBand(scene.settings.dx) : 0.0);
+        if (notes) {
+            // The middle of what is inside: a file's band may be wider on one side than on the other.
+            Vec3d lo, hi;
+            ls->insideBounds(lo, hi);
+            if (!(lo[0] <= hi[0])) ls->bounds(lo, hi);
+            notes->centre = 0.5 * (lo + hi);
+            notes->voxel = ls->voxelSize();
+        }
+        return ls;
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
     }
@@ -136,8 +174,10 @@ std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::st
     }
 }
 
-/// Collider `index`; `pivot`, if given, receives the pivot its motion turns about (the scene's, or its centre).
-std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, Vec3d* pivot = nullptr) {
+/// Collider `index`; `pivot`, if given, receives the pivot its motion turns about (the scene's, or its centre), and
+/// `warnings` what is worth a word about its field.
+std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, Vec3d* pivot = nullptr,
+                                     std::vector<std::string>* warnings = nullptr, double* voxel = nullptr) {
     const ColliderDesc& c = scene.colliders[index];
     const auto motion = [&](const Vec3d& centre) {
         if (pivot) *pivot = c.motion.pivotGiven ? c.motion.pivot : centre;
@@ -149,10 +189,11 @@ std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, 
     return std::visit(
         [&]<class S>(const S& shape) -> std::unique_ptr<Collider> {
             if constexpr (kFromFile<S>) {
-                const auto ls = levelSetOf(scene, where, shape, true, c.inside);
-                Vec3d lo, hi;
-                ls->bounds(lo, hi);
-                return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction, motion(0.5 * (lo + hi)),
+                FieldNotes notes;
+                const auto ls = levelSetOf(scene, where, shape, true, c.inside, &notes);
+                if (warnings && !notes.warning.empty()) warnings->push_back(notes.warning);
+                if (voxel) *voxel = notes.voxel;
+                return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction, motion(notes.centre),
                                                                          c.inside);
             } else {
                 return analyticCollider(shape, c.boundary, c.friction, motion(shape.middle()), c.inside);
@@ -400,12 +441,44 @@ void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo,
     }
 }
 
+namespace {
+
+/// Above this share of a set's particles, an overlap or a start inside a collider is worth a word.
+constexpr double kNoticeableShare = 0.01;
+
+/// Set i's word on its own sampling (n particles in all) and on each collider it starts inside of: `inside[c]` of
+/// its particles lie inside collider c at its start.
+void setWarnings(const SceneDesc& scene, std::size_t i, long long n, const std::vector<long long>& inside, std::vector<std::string>& out) {
+    const std::string where = scene.file + ": /sets/" + std::to_string(i);
+    if (n < kFewParticles)
+        out.push_back(where + ": only " + std::to_string(n) + " particles; so small a body is a few cells across (raise "
+                                                               "particles_per_cell or use a smaller dx)");
+    for (std::size_t c = 0; c < inside.size(); ++c)
+        if (double(inside[c]) > kNoticeableShare * double(n))
+            out.push_back(where + "/shape: " + std::to_string(inside[c]) + " of " + std::to_string(n) + " particles start inside collider " +
+                          std::to_string(c) + " (they are pushed out at the first substep); move the set or the collider");
+}
+
+/// How many of `positions` lie inside each collider at set i's start.
+std::vector<long long> countInside(const SceneDesc& scene, std::size_t i, const std::vector<Vec3d>& positions,
+                                   const std::vector<std::unique_ptr<Collider>>& colliders) {
+    const double t0 = double(scene.sets[i].startFrame) / scene.settings.fps;
+    std::vector<long long> inside;
+    for (const auto& c : colliders) {
+        c->prepare(t0);  // a sequence loads the frames around t0
+        long long k = 0;
+        for (const Vec3d& x : positions) k += c->signedDistance(x, t0) < 0.0;
+        inside.push_back(k);
+    }
+    return inside;
+}
+
+}  // namespace
+
 std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
     std::vector<std::string> out;
-    // Above this share of a set's particles, an overlap or a start inside a collider is worth a word.
-    constexpr double kNoticeableShare = 0.01;
     std::vector<std::unique_ptr<Collider>> colliders;
-    for (std::size_t c = 0; c < scene.colliders.size(); ++c) colliders.push_back(colliderOf(scene, c));
+    for (std::size_t c = 0; c < scene.colliders.size(); ++c) colliders.push_back(colliderOf(scene, c, nullptr, &out));
     std::vector<std::vector<Vec3d>> positions(scene.sets.size());
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const ParticleSetDesc& d = scene.sets[i];
@@ -415,36 +488,7 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
                           "(set it to multi_field)");
         if (d.continuous || isOutlet(d.shape)) continue;  // a stream enters over time
         positions[i] = sampleSet(scene, i).positions;
-        const std::string where = scene.file + ": /sets/" + std::to_string(i);
-        const std::size_t n = positions[i].size();
-        if ((long long)n < kFewParticles)
-            out.push_back(where + ": only " + std::to_string(n) + " particles; so small a body is a few cells across (raise "
-                                                                   "particles_per_cell or use a smaller dx)");
-        const double t0 = double(d.startFrame) / scene.settings.fps;
-        for (std::size_t c = 0; c < colliders.size(); ++c) {
-            colliders[c]->prepare(t0);  // a sequence loads the frames around t0
-            std::size_t inside = 0;
-            for (const Vec3d& x : positions[i]) inside += colliders[c]->signedDistance(x, t0) < 0.0;
-            if (double(inside) > kNoticeableShare * double(n))
-                out.push_back(where + "/shape: " + std::to_string(inside) + " of " + std::to_string(n) +
-                              " particles start inside collider " + std::to_string(c) +
-                              " (they are pushed out at the first substep); move the set or the collider");
-        }
-    }
-    for (std::size_t c = 0; c < scene.colliders.size(); ++c) {
-        const auto* mesh = std::get_if<MeshShape>(&scene.colliders[c].shape);
-        if (!mesh) continue;
-        const std::string where = "/colliders/" + std::to_string(c);
-        const MeshField f = meshField(scene, where, *mesh, true, scene.colliders[c].inside);
-        if (resolves(f.voxel, f.wall.thinnest)) continue;
-        std::ostringstream w;
-        w.precision(3);
-        w << scene.file << ": " << where << "/file: " << mesh->file << " has walls as thin as " << f.wall.thinnest << " m";
-        if (f.wall.triangle >= 0) w << " (at " << f.wall.where.transpose() << ")";
-        w << "; its distance field's voxel of " << f.voxel << " m" << (mesh->voxelSize > 0.0 ? "" : " (the finest picked by itself, dx/8)")
-          << " resolves walls down to " << kVoxelsAcrossWall * f.voxel << " m, and material passes through thinner ones: set voxel_size to "
-          << f.wall.thinnest / kVoxelsAcrossWall << " or less";
-        out.push_back(w.str());
+        setWarnings(scene, i, (long long)positions[i].size(), countInside(scene, i, positions[i], colliders), out);
     }
     for (std::size_t a = 0; a < scene.sets.size(); ++a) {
         if (positions[a].empty() || std::holds_alternative<PointsShape>(scene.sets[a].shape)) continue;
@@ -483,6 +527,11 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
     DerivedValues found;
     found.setPivot.resize(scene.sets.size());
     found.colliderPivot.resize(scene.colliders.size());
+    // The colliders first: the sets' samples are checked against them.
+    std::vector<std::unique_ptr<Collider>> colliders;
+    found.colliderVoxel.assign(scene.colliders.size(), 0.0);
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i)
+        colliders.push_back(colliderOf(scene, i, &found.colliderPivot[i], &found.warnings, &found.colliderVoxel[i]));
     const SpeciesLayout layout = speciesLayout(scene);
     // Bodies, numbered in order of first appearance: a set's `body` name, or else its own name.
     std::vector<int> bodyOf;
@@ -534,8 +583,14 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         if (total == 0)
             throw SceneError(scene.file + ": /sets/" + std::to_string(i) +
                              "/shape: no particle fits in the shape at dx = " + std::to_string(scene.settings.dx));
+        std::vector<long long> inside = countInside(scene, i, e.positions, colliders);
+        for (long long& k : inside) k = comm.sum(k);
+        setWarnings(scene, i, total, inside, found.warnings);
         e.velocity = d.velocity;
         e.velocities = std::move(samples.velocities);
+        // A rigid spin's velocity gradient, [w]x: the affine velocity APIC carries for it.
+        const Vec3f w = d.angularVelocity.cast<float>();
+        e.affine << 0.0f, -w[2], w[1], w[2], 0.0f, -w[0], -w[1], w[0], 0.0f;
         e.volume = float(samples.volume / double(total));
         const float density = std::visit([](const auto& p) { return p.density; }, params);
         e.mass = float(e.volume * density * d.massScale);
@@ -550,7 +605,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         e.pauseFrames = d.pauseFrames;
         sim->addEmitter(std::move(e));
     }
-    for (std::size_t i = 0; i < scene.colliders.size(); ++i) sim->addCollider(colliderOf(scene, i, &found.colliderPivot[i]));
+    for (auto& c : colliders) sim->addCollider(std::move(c));
     if (derived) *derived = std::move(found);
     return sim;
 }
@@ -561,7 +616,8 @@ DerivedValues deriveValues(const SceneDesc& scene) {
         const ParticleSetDesc& d = scene.sets[i];
         out.setPivot.push_back(d.angularVelocity.isZero() || d.continuous || isOutlet(d.shape) ? std::nullopt : sampleSet(scene, i).pivot);
     }
-    for (std::size_t i = 0; i < scene.colliders.size(); ++i) colliderOf(scene, i, &out.colliderPivot.emplace_back());
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i)
+        colliderOf(scene, i, &out.colliderPivot.emplace_back(), nullptr, &out.colliderVoxel.emplace_back());
     return out;
 }
 
@@ -585,6 +641,9 @@ std::string resolvedWithDerived(const SceneDesc& scene, const DerivedValues& der
     for (std::size_t i = 0; i < scene.sets.size() && i < derived.setPivot.size(); ++i)
         if (derived.setPivot[i] && !scene.sets[i].pivotGiven) j["sets"][i] = withKey(j["sets"][i], "pivot", array(*derived.setPivot[i]), "velocity_field");
     for (std::size_t i = 0; i < scene.colliders.size() && i < derived.colliderPivot.size(); ++i) {
+        if (const auto* mesh = std::get_if<MeshShape>(&scene.colliders[i].shape);
+            mesh && mesh->voxelSize <= 0.0 && i < derived.colliderVoxel.size() && derived.colliderVoxel[i] > 0.0)
+            j["colliders"][i]["voxel_size"] = derived.colliderVoxel[i];
         const MotionDesc& m = scene.colliders[i].motion;
         nlohmann::ordered_json& motion = j["colliders"][i]["motion"];
         if (!m.pivotGiven) motion = withKey(motion, "pivot", array(derived.colliderPivot[i]), "keyframes");

@@ -249,7 +249,7 @@ void motionKeys(V& v, MotionDesc& m) {
     v.vec3(Key{.name = "pivot",
                .help = "the point it turns about, and whose position keyframes give; the resolved scene states the centre it took",
                .unit = "m",
-               .byDefault = "the collider's centre (a file's: its level set's bounds')",
+               .byDefault = "the collider's centre (a mesh's: its box's; a VDB's: the box of its inside voxels')",
                .derived = true},
            m.pivot);
     double previous = -std::numeric_limits<double>::infinity();

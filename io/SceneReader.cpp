@@ -63,7 +63,9 @@ public:
     }
 
     [[noreturn]] void fail(std::string_view key, const std::string& what) const {
-        const std::string where = path_.empty() && key.empty() ? "/" : path_ + (key.empty() ? "" : "/" + std::string(key));
+        // An unknown key is the user's text: cut short like any quoted value (a 50 MB key made 50 MB of message).
+        const std::string name = key.size() > kMaxQuoted ? std::string(key.substr(0, kMaxQuoted)) + "..." : std::string(key);
+        const std::string where = path_.empty() && key.empty() ? "/" : path_ + (key.empty() ? "" : "/" + name);
         throw SceneError(file_ + ": " + where + ": " + what);
     }
     const std::string& path() const { return path_; }

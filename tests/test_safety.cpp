@@ -297,6 +297,9 @@ TEST(Safety, HostileScenesGetANamedErrorAndExitTwo) {
         {"bulk modulus 1e12", waterScene(R"("dx": 0.05)", box, R"({"bulk_modulus": 1e12})"), 2, "wave speed"},
         {"1e6 substeps per frame", waterScene(R"("dx": 0.05, "substeps": 1000000)", box), 2, "/simulation/substeps: frames would need"},
         {"2e9 particles", waterScene(R"("dx": 0.05)", box + R"(, "count": 2000000000)"), 2, "/sets: the run needs about"},
+        // The key quoted as any value is: cut to 80 characters (a 1 MB key made a 1 MB message).
+        {"a 1 MB unknown key", R"({"simulation": {")" + std::string(1 << 20, 'k') + R"(": 1}})", 2,
+         "/simulation/" + std::string(80, 'k') + "...: unknown key; known here: frames"},
     };
     const std::string dir = tempDir("bad");
     for (const BadCase& c : cases) {
@@ -305,6 +308,7 @@ TEST(Safety, HostileScenesGetANamedErrorAndExitTwo) {
         EXPECT_EQ(r.code, c.code) << c.what << ": " << r.output.substr(0, 400);
         EXPECT_NE(r.output.find(c.message), std::string::npos) << c.what << ": " << r.output.substr(0, 400);
         EXPECT_NE(r.output.find("bad.json"), std::string::npos) << c.what << " does not name the file";
+        EXPECT_LT(r.output.size(), 4000u) << c.what << ": a message to read, not the scene again";
     }
     // E = 1e15 for a solid, as the set's own material.
     const std::string stiff = R"({"simulation": {"dx": 0.05}, "sets": [{"material": "jelly", "material_params": {"youngs_modulus": 1e15}, )" +

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 
 #include "core/LevelSetGeometry.h"
 #include "core/RigidCollider.h"
@@ -98,7 +99,7 @@ TEST(MeshCollider, AnOpenMeshNeedsAThicknessAndBadFilesAreNamed) {
         {R"({"type": "mesh", "file": "sheet.obj"})", "sheet.obj: the mesh is open (4 edges belong to one triangle only)"},
         {R"({"type": "mesh", "file": "missing.obj"})", "missing.obj: no such mesh file"},
         {R"({"type": "vdb", "file": "fog.vdb", "grid": "density"})", "fog.vdb: grid \"density\" is a fog volume, not a level set"},
-        {R"({"type": "vdb", "file": "fog.vdb", "grid": "surface"})", "fog.vdb: no grid \"surface\" (grids: density)"},
+        {R"({"type": "vdb", "file": "fog.vdb", "grid": "surface"})", "fog.vdb: no grid \"surface\" (the file holds \"density\")"},
         {R"({"type": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 0], "radius": 1, "height": 1})",
          "/colliders/0/axis: must not be the zero vector"},
         {R"({"type": "box", "center": [0, 0, 0], "size": [1, 1, 1], "rotation": {"axis": [0, 0, 0], "degrees": 30}})",
@@ -230,6 +231,17 @@ TEST(MeshCollider, WallThicknessIsMeasuredAndWallsTooThinForTheFieldAreNamed) {
     EXPECT_NE(coarse.find("its distance field's voxel of 0.01 m resolves walls down to 0.02 m"), std::string::npos) << coarse;
     EXPECT_NE(coarse.find("set voxel_size to 0.0025 or less"), std::string::npos) << coarse;
     EXPECT_EQ(warnings(R"({"type": "mesh", "file": "cup.obj"})"), "");  // the default picks dx/8
+    // The scene that runs states the voxel it took: half the thinnest wall, dx/8 (0.0025) for walls dx/4 thick.
+    DerivedValues derived;
+    const SceneDesc picked = loadScene(dir + "/scene.json");
+    buildSimulation(picked, Comm::single(), &derived);
+    EXPECT_TRUE(derived.warnings.empty());
+    EXPECT_EQ(nlohmann::json::parse(resolvedWithDerived(picked, derived))["colliders"][0]["voxel_size"].get<double>(), dx / 8);
+    // And a run warns as validate does (`mpm run` prints what it found building the colliders).
+    warnings(R"({"type": "mesh", "file": "cup.obj", "voxel_size": 0.01})");
+    buildSimulation(loadScene(dir + "/scene.json"), Comm::single(), &derived);
+    ASSERT_EQ(derived.warnings.size(), 1u);
+    EXPECT_NE(coarse.find(derived.warnings[0]), std::string::npos) << derived.warnings[0];
 }
 
 namespace {

@@ -22,7 +22,8 @@ struct MeshShape {
                s.file);
         v.number(Key{.name = "voxel_size",
                      .help = "voxel of its distance field; 0: for a collider dx / 2, or finer (to dx / 8) so that its thinnest wall "
-                             "is two voxels thick (`mpm validate` warns of walls thinner than the field resolves); for a set dx / 2",
+                             "is two voxels thick (`mpm validate` warns of walls thinner than the field resolves), stated in the resolved scene; "
+                             "for a set dx / 2",
                      .lo = 0.0, .hi = kHuge, .unit = "m"},
                  s.voxelSize);
         v.number(Key{.name = "thickness",
