@@ -14,11 +14,14 @@
 #include <iostream>
 #include <memory>
 #include <new>
+#include <sstream>
 #include <thread>
 
 #include "io/AtomicFile.h"
 #include "io/Checkpoint.h"
+#include "io/DirectoryLock.h"
 #include "io/Run.h"
+#include "io/RunEstimate.h"
 #include "io/SceneBudget.h"
 #include "io/SceneBuilder.h"
 #include "io/SceneReader.h"
@@ -31,13 +34,15 @@ constexpr int kExitOk = 0, kExitRunFailed = 1, kExitBadInput = 2;
 /// The shell's convention: 128 + the signal's number.
 constexpr int kExitSignalBase = 128;
 
-/// The signal that asked the run to stop (0: none). The handler only sets it; a second signal of the same
-/// kind ends the process at once, with the default action.
+/// The signal that asked the run to stop (0: none). The handler only sets it; a second signal ends the process
+/// at once, with the default action, removing the directory's lock file first (a frame being written is a
+/// temporary file, which the next run removes).
 std::atomic<int> gStopSignal{0};
 static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs a lock-free flag");
 
 extern "C" void onStopSignal(int sig) {
     if (gStopSignal.load() != 0) {
+        DirectoryLock::removeHeldLockFile();
         std::signal(sig, SIG_DFL);
         std::raise(sig);
         return;
@@ -146,12 +151,28 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
 
 int validate(const std::string& scenePath, bool strict, bool printScene) {
     const SceneDesc scene = loadScene(scenePath);
-    const SceneBudget budget = estimateBudget(scene, true);
+    SceneBudget budget = estimateBudget(scene, true);
+    // The run time from costs measured here, on the threads the run takes by default.
+    if (budget.problems.empty()) {
+        const int threads = scene.threads > 0 ? scene.threads : int(std::thread::hardware_concurrency());
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+        estimateRunTime(scene, budget);
+    }
     // The summary first; the scene with every default stated (what a run writes as scene.json) when asked for.
     if (printScene) std::cout << resolvedWithDerived(scene, deriveValues(scene)) << "\n";
     std::fprintf(stderr, "%s", describeBudget(budget).c_str());
     checkBudget(scene, budget);
-    const std::vector<std::string> warnings = sceneWarnings(scene);
+    std::vector<std::string> warnings = sceneWarnings(scene);
+    // A scene far larger than meant (sizes in other units: a radius of 2 m for 2 cm) shows first as a run of hours.
+    constexpr double kLongRun = 3600.0;
+    if (budget.runSeconds > kLongRun) {
+        std::ostringstream w;
+        w.precision(3);
+        w << scene.file << ": /sets: the run would take about " << budget.runSeconds / 3600.0 << " hours here ("
+          << (long long)budget.peakParticles << " particles, " << budget.substepsPerFrame << " substeps a frame, " << scene.frames
+          << " frames); if that is more than meant, check the shapes' sizes and dx are in metres (a radius of 2 is 2 m)";
+        warnings.insert(warnings.begin(), w.str());
+    }
     for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     if (strict && !warnings.empty()) {
         std::fprintf(stderr, "error: %s: %zu warning%s, and --strict makes them errors\n", scenePath.c_str(), warnings.size(),
@@ -178,8 +199,30 @@ int main(int argc, char** argv) {
 
 namespace {
 
+/// `text` with each run of characters without a space longer than a line or two cut to its ends: a path or name
+/// of 100,000 characters is quoted in a message, not echoed whole.
+std::string withLongWordsCut(const std::string& text) {
+    constexpr std::size_t kLongest = 240, kHead = 120, kTail = 60;
+    std::string out;
+    std::size_t start = 0;
+    while (start < text.size()) {
+        std::size_t end = text.find_first_of(" \n", start);
+        if (end == std::string::npos) end = text.size();
+        const std::size_t n = end - start;
+        if (n > kLongest)
+            out += text.substr(start, kHead) + "...(" + std::to_string(n) + " characters)..." + text.substr(end - kTail, kTail);
+        else
+            out += text.substr(start, n);
+        if (end < text.size()) out += text[end];
+        start = end + 1;
+    }
+    return out;
+}
+
 /// Prints an error once (rank 0) for a failure every rank met; one only this rank met ends all of them.
-int fail(int code, const char* format, const char* what, bool everyRank = true) {
+int fail(int code, const char* format, const char* message, bool everyRank = true) {
+    const std::string shown = withLongWordsCut(message);
+    const char* what = shown.c_str();
     const Comm& comm = Comm::world();
     if (!everyRank && comm.distributed()) {
         std::fprintf(stderr, "error: rank %d of %d: ", comm.rank(), comm.size());
@@ -214,7 +257,7 @@ int cli(int argc, char** argv) {
     validateCmd->add_option("scene", scenePath, "scene file (JSON)");
     validateCmd->add_flag("--explain", explain, "list every scene field, its default and allowed values");
     bool strict = false, printScene = false;
-    validateCmd->add_flag("--strict", strict, "exit 2 on warnings too (a tiny set, a set inside a collider, overlapping sets)");
+    validateCmd->add_flag("--strict", strict, "exit 2 on warnings too (a tiny set, a set inside a collider, overlapping sets, thin mesh walls, a set after the last frame)");
     validateCmd->add_flag("--print-scene", printScene,
                           "print the scene with every default stated (as a run writes it to scene.json) on standard output");
 

@@ -24,6 +24,11 @@ std::string readAll(int fd) {
     return s;
 }
 
+/// The lock file this process holds, for a signal handler to remove (empty: none). A fixed buffer: the handler may
+/// call nothing that allocates.
+constexpr std::size_t kLivePathSize = 4096;
+char gLivePath[kLivePathSize] = {};
+
 std::string hostName() {
     char host[256] = {};
     ::gethostname(host, sizeof host - 1);
@@ -63,10 +68,16 @@ DirectoryLock::DirectoryLock(const std::string& directory) : path_(directory + "
     const std::string me = "pid " + std::to_string(::getpid()) + " on host " + hostName() + " since " + when + "\n";
     if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, me.data(), me.size(), 0) != ssize_t(me.size()))
         throw WriteError(path_, std::string("cannot write the lock file: ") + std::strerror(errno));
+    if (path_.size() < kLivePathSize) std::memcpy(gLivePath, path_.c_str(), path_.size() + 1);
+}
+
+void DirectoryLock::removeHeldLockFile() noexcept {
+    if (gLivePath[0] != '\0') ::unlink(gLivePath);  // async-signal-safe
 }
 
 DirectoryLock::~DirectoryLock() {
     if (fd_ < 0) return;
+    gLivePath[0] = '\0';
     ::unlink(path_.c_str());  // while still holding it, so no one else's lock is removed
     ::close(fd_);
 }

@@ -26,6 +26,9 @@ public:
     /// Who held the lock before, when the lock file was left by a process that is gone (empty otherwise).
     const std::string& takenOverFrom() const { return previous_; }
     const std::string& path() const { return path_; }
+    /// Removes the lock file this process holds, if any: for a signal handler that ends the process at once (a
+    /// second Ctrl-C), so that no lock is left behind to be taken over. Async-signal-safe.
+    static void removeHeldLockFile() noexcept;
 
 private:
     std::string path_, previous_;

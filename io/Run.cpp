@@ -10,6 +10,7 @@
 #include <regex>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <unistd.h>
 
 #include "io/AtomicFile.h"
 #include "io/Checkpoint.h"
@@ -129,6 +130,7 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
         std::error_code ec;
         fs::create_directories(dir_, ec);
         if (ec) throw SceneError(dir_ + ": cannot create the output directory: " + ec.message() + "; choose another with -o");
+        refuseNamesTooLong();
         lock_ = std::make_unique<DirectoryLock>(dir_);
         if (!lock_->takenOverFrom().empty())
             events_.warning("took over the lock of " + dir_ + " from a run that is gone (" + lock_->takenOverFrom() + ")");
@@ -201,6 +203,19 @@ void SceneRun::guarded(const std::string& what, F&& f) {
             << b.memoryBytes / double(1u << 30) << " GiB at its peak; this machine has " << b.machineBytes / double(1u << 30) << " GiB)";
         throw LimitExceeded(msg.str());
     }
+}
+
+void SceneRun::refuseNamesTooLong() const {
+    // The longest name a run writes: a checkpoint part's, with its frame's digits and the atomic write's temporary
+    // suffix (<scene>_checkpoint_NNNN_rankRRR.mpmc.tmpPID). Found now, not at the first frame's write minutes later.
+    constexpr std::size_t kPidDigits = 10;
+    const std::size_t frameDigits = std::max<std::size_t>(4, std::to_string(scene_.frames).size());
+    const std::size_t longest = scene_.name.size() + std::strlen("_checkpoint_") + frameDigits + std::strlen("_rank000.mpmc.tmp") + kPidDigits;
+    const long limit = ::pathconf(dir_.c_str(), _PC_NAME_MAX);
+    if (limit > 0 && longest > std::size_t(limit))
+        throw SceneError(scene_.file + ": the scene's name (its file's, " + std::to_string(scene_.name.size()) +
+                         " characters) makes file names of up to " + std::to_string(longest) + " characters, and " + dir_ + " takes " +
+                         std::to_string(limit) + ": give the scene file a shorter name (its frames are named after it)");
 }
 
 void SceneRun::refuseAnotherScenesDirectory() const {

@@ -69,9 +69,11 @@ private:
     /// why it cannot be used and returns false (every rank alike). `path` names it in notes.
     bool readCheckpointOf(const CheckpointFiles& files, Checkpoint& c, bool& share, std::string& path);
     void saveCheckpoint();
-    /// Rank 0's part of saveCheckpoint: the file, and the older ones removed.
+    /// Refuses a scene whose name makes file names longer than the output directory's file system takes (exit 2).
+    void refuseNamesTooLong() const;
     void refuseAnotherScenesDirectory() const;
     bool supersededCheckpoint(int frame) const;
+    /// Rank 0's part of saveCheckpoint: the file, and the older ones removed.
     void writeCheckpointFiles(const SimState& state);
     /// output.rank_files = "per_rank" on several ranks: each rank writes its part of the set, nothing gathered.
     void saveCheckpointParts();

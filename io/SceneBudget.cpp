@@ -14,8 +14,6 @@ namespace mpm {
 
 namespace {
 
-/// Sets estimated to hold up to this many particles are sampled, so that validate counts them exactly.
-constexpr double kSampleUpTo = 2e6;
 /// Bytes per particle besides its arrays: the sort destination and the halo workspace of P2G.
 constexpr double kEngineBytesPerParticle = 4.0 + 3.0;
 /// Grid nodes per particle at one particle per cell, counting partly filled leaves and halo leaves (measured
@@ -65,6 +63,30 @@ long long emissionsWithin(const ParticleSetDesc& d, int frames) {
 }
 
 
+/// Frames that a set's particles of one emission spend in the scene, summed over its emissions (a stream's whole
+/// flow: its particles enter evenly over its duration).
+double framesPresent(const ParticleSetDesc& d, int frames) {
+    if (d.continuous) {
+        const double flowing = std::clamp(double(frames - d.startFrame), 0.0, double(d.durationFrames));
+        return flowing > 0.0 ? (double(frames - d.startFrame) - 0.5 * flowing) * flowing / double(d.durationFrames) : 0.0;
+    }
+    double sum = 0.0;
+    for (long long k = 0, e = d.startFrame; k < emissionsWithin(d, frames) && e < frames; ++k, e += d.pauseFrames + 1)
+        sum += double(frames - e);
+    return sum;
+}
+
+std::string duration(double seconds) {
+    std::ostringstream s;
+    s.precision(2);
+    if (seconds < 1.0) s << "under a second";
+    else if (seconds < 120.0) s << std::fixed << seconds << " s";
+    else if (seconds < 2.0 * 3600.0) s << std::fixed << seconds / 60.0 << " min";
+    else if (seconds < 2.0 * 86400.0) s << std::fixed << seconds / 3600.0 << " h";
+    else s << std::fixed << seconds / 86400.0 << " days";
+    return s.str();
+}
+
 }  // namespace
 
 SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks) {
@@ -100,6 +122,7 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         vmax = std::max(vmax, d.velocity.norm());
         const double total = double(s.particles) * double(s.emissions);
         b.peakParticles += total;
+        b.particleSubsteps += double(s.particles) * framesPresent(d, scene.frames);
         const double gridPerParticle = kNodesPerCellOfParticles * kBytesPerNode / d.particlesPerCell;
         const double simulated = perParticle + kEngineBytesPerParticle + gridPerParticle;
         // On ranks, rank 0 simulates its share and gathers every particle to write a frame or a checkpoint,
@@ -143,6 +166,7 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
     else cause << "the CFL bound from the initial speed " << vmax << " m/s";
     b.stepCause = cause.str();
     b.substepsPerFrame = std::ceil(1.0 / (st.fps * b.dt));
+    b.particleSubsteps *= b.substepsPerFrame;
     if (!(b.substepsPerFrame <= double(st.maxSubstepsPerFrame))) {
         std::ostringstream p;
         p << (st.substepsPerFrame > st.maxSubstepsPerFrame ? "/simulation/substeps" : "/simulation")
@@ -176,6 +200,7 @@ std::string describeBudget(const SceneBudget& b) {
     s << "memory: about " << gib(b.memoryBytes) << " at the peak (" << (long long)b.peakParticles << " particles); this machine has "
       << gib(b.machineBytes) << "\n";
     s << "substeps per frame: about " << b.substepsPerFrame << " at the start (dt = " << b.dt << " s, set by " << b.stepCause << ")\n";
+    if (b.runSeconds > 0.0) s << "run time: about " << duration(b.runSeconds) << " here (" << b.runBasis << ")\n";
     return s.str();
 }
 

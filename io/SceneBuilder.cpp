@@ -445,6 +445,27 @@ namespace {
 
 /// Above this share of a set's particles, an overlap or a start inside a collider is worth a word.
 constexpr double kNoticeableShare = 0.01;
+/// Above this share inside a collider, a set is not pushed out whole: it is crushed against the surface or falls
+/// through the collider.
+constexpr double kMostlyInside = 0.5;
+
+/// The error of a set of which no particle fits its shape: the run refuses it, and so does validate.
+[[noreturn]] void noParticleFits(const SceneDesc& scene, std::size_t i) {
+    std::ostringstream what;
+    what << scene.file << ": /sets/" << i << "/shape: no particle fits in the shape at dx = " << scene.settings.dx
+         << " m (particles lie about dx / cbrt(particles_per_cell) apart: a shape thinner than that holds none); make it larger or dx smaller";
+    throw SceneError(what.str());
+}
+
+/// Set i's word on when it enters: starting at or after the scene's end, it never appears.
+void entryWarnings(const SceneDesc& scene, std::size_t i, std::vector<std::string>& out) {
+    const int start = scene.sets[i].startFrame, frames = scene.frames;
+    if (start < frames) return;
+    out.push_back(scene.file + ": /sets/" + std::to_string(i) + "/start_frame: " + std::to_string(start) +
+                  " is not before the scene's end (simulation.frames " + std::to_string(frames) +
+                  "; a set starting at F is in the files from F + 1 on): the set never appears; give a start_frame under " +
+                  std::to_string(frames) + " or more frames");
+}
 
 /// Set i's word on its own sampling (n particles in all) and on each collider it starts inside of: `inside[c]` of
 /// its particles lie inside collider c at its start.
@@ -453,10 +474,24 @@ void setWarnings(const SceneDesc& scene, std::size_t i, long long n, const std::
     if (n < kFewParticles)
         out.push_back(where + ": only " + std::to_string(n) + " particles; so small a body is a few cells across (raise "
                                                                "particles_per_cell or use a smaller dx)");
-    for (std::size_t c = 0; c < inside.size(); ++c)
-        if (double(inside[c]) > kNoticeableShare * double(n))
-            out.push_back(where + "/shape: " + std::to_string(inside[c]) + " of " + std::to_string(n) + " particles start inside collider " +
-                          std::to_string(c) + " (they are pushed out at the first substep); move the set or the collider");
+    for (std::size_t c = 0; c < inside.size(); ++c) {
+        if (double(inside[c]) <= kNoticeableShare * double(n)) continue;
+        std::string what = where + "/shape: " + std::to_string(inside[c]) + " of " + std::to_string(n) + " particles start inside collider " +
+                           std::to_string(c);
+        if (const auto* plane = std::get_if<Plane>(&scene.colliders[c].shape)) {
+            std::ostringstream normal;
+            normal << plane->normal[0] << ", " << plane->normal[1] << ", " << plane->normal[2];
+            what += ", a plane whose solid is on the side its normal (" + normal.str() + ") points away from";
+        }
+        if (double(inside[c]) <= kMostlyInside * double(n)) {
+            out.push_back(what + " (they are pushed out at the first substep); move the set or the collider");
+            continue;
+        }
+        what += ": a set mostly inside a collider is not pushed out whole (it is crushed against the surface, and the run may stop "
+                "as its energy blows up, or it falls out through the collider's far side); move the set or the collider";
+        if (std::holds_alternative<Plane>(scene.colliders[c].shape)) what += ", or turn the plane's normal towards the set";
+        out.push_back(what);
+    }
 }
 
 /// How many of `positions` lie inside each collider at set i's start.
@@ -486,8 +521,15 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
             out.push_back(scene.file + ": /sets/" + std::to_string(i) + "/body: \"" + d.body +
                           "\" names a body, but simulation.contact is single_field, where all bodies share one velocity field "
                           "(set it to multi_field)");
+        entryWarnings(scene, i, out);
         if (d.continuous || isOutlet(d.shape)) continue;  // a stream enters over time
+        double volume = 0.0;
+        Vec3d lo, hi;
+        setExtent(scene, i, volume, lo, hi);
+        const double dx = scene.settings.dx;
+        if ((d.count > 0 ? double(d.count) : volume / (dx * dx * dx) * d.particlesPerCell) > kSampleUpTo) continue;
         positions[i] = sampleSet(scene, i).positions;
+        if (positions[i].empty()) noParticleFits(scene, i);
         setWarnings(scene, i, (long long)positions[i].size(), countInside(scene, i, positions[i], colliders), out);
     }
     for (std::size_t a = 0; a < scene.sets.size(); ++a) {
@@ -544,6 +586,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
     }
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const ParticleSetDesc& d = scene.sets[i];
+        entryWarnings(scene, i, found.warnings);
         AnyMaterialParams params = d.params;
         visitMaterialParams(params, [&]<class M>(typename M::Params& p) { M::scaleStiffness(p, d.lambdaScale, d.muScale); });
         const int species = sim->addSpecies(makeSpecies(d.name, params), bodyOf[i]);
@@ -580,9 +623,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
             e.first = std::accumulate(sizes.begin(), sizes.begin() + comm.rank(), 0LL);
             e.total = total = std::accumulate(sizes.begin(), sizes.end(), 0LL);
         }
-        if (total == 0)
-            throw SceneError(scene.file + ": /sets/" + std::to_string(i) +
-                             "/shape: no particle fits in the shape at dx = " + std::to_string(scene.settings.dx));
+        if (total == 0) noParticleFits(scene, i);
         std::vector<long long> inside = countInside(scene, i, e.positions, colliders);
         for (long long& k : inside) k = comm.sum(k);
         setWarnings(scene, i, total, inside, found.warnings);

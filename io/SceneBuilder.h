@@ -45,9 +45,12 @@ Emitter::Stream streamOf(const SceneDesc& scene, std::size_t i);
 /// Set `i`'s volume and its bounds in the scene, without sampling it (reads its file, if it has one).
 void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo, Vec3d& hi);
 
+/// Sets expected to hold more particles than this are not sampled by validate (to count them, or to look for
+/// overlaps): it answers in seconds whatever the scene's size.
+inline constexpr double kSampleUpTo = 2e6;
 /// What in the scene is legal but likely a mistake, each "FILE: /json/path: what; what to do": a set of fewer
 /// than kFewParticles particles, a set starting partly inside a collider, two sets that overlap. Samples the
-/// sets and builds the colliders (mpm validate prints these; with --strict they fail it).
+/// sets (up to kSampleUpTo particles) and builds the colliders (mpm validate prints these; with --strict they fail it).
 inline constexpr long long kFewParticles = 100;
 std::vector<std::string> sceneWarnings(const SceneDesc& scene);
 

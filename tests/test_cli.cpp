@@ -1,6 +1,8 @@
 // The mpm program: exit codes (0 ok, 2 bad input, 1 failed run) and that a blow-up is caught and
 // reported instead of written to disk.
 #include <gtest/gtest.h>
+
+#include <chrono>
 #include <sys/wait.h>
 
 #include <cstdlib>
@@ -198,6 +200,23 @@ TEST(Cli, TheSceneARunWritesRunsAgainToTheSameBits) {
     mpm::test::expectSameOutput((dir / "a").string(), (dir / "b").string(), "gate", 8);
 }
 
+TEST(Cli, ValidateGivesTheRunTimeAndWarnsOfAScaleMistakeWithinSeconds) {
+    // A ball of radius 2 where 0.02 was meant: 33.5 million particles, 59 substeps a frame (the CFL bound of
+    // water at dx 0.02), 4,800 frames: 9.5e12 particle-substeps, days on any machine of today. validate neither
+    // samples it nor stalls: it says how long the run would take, from this machine's measured rate.
+    const std::string big = sceneFile("big.json", R"({"simulation": {"frames": 4800}, "sets": [{"material": "water",
+        "shape": {"type": "sphere", "center": [0, 2.1, 0], "radius": 2.0}}], "colliders": [{"type": "plane"}]})");
+    const auto start = std::chrono::steady_clock::now();
+    const Result r = runMpm("validate " + big);
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0);
+    EXPECT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("run time: about "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("frames written, at costs measured now on water"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("big.json: /sets: the run would take about "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("(33510321 particles, 59 substeps a frame, 4800 frames)"), std::string::npos) << r.output;
+    EXPECT_EQ(runMpm("validate --strict " + big).code, 2);
+}
+
 TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     const Result version = runMpm("--version");
     EXPECT_EQ(version.code, 0);
@@ -214,6 +233,19 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     const Result unwritable = runMpm("run " + scene + " -o " + scene + "/out");  // under a file
     EXPECT_EQ(unwritable.code, 2);
     EXPECT_NE(unwritable.output.find("cannot create the output directory"), std::string::npos) << unwritable.output;
+    // A name of 100,000 characters is quoted by its ends, not echoed whole.
+    const Result huge = runMpm("run " + scene + " -o " + std::string(100000, 'a'));
+    EXPECT_EQ(huge.code, 2);
+    EXPECT_NE(huge.output.find("...(100001 characters)...aaa"), std::string::npos) << huge.output.substr(0, 400);
+    EXPECT_LT(huge.output.size(), 500u);
+    // A scene whose name makes its frames' names too long for the file system fails before it runs, not at its first frame.
+    const std::string longName = std::string(240, 'n') + ".json";
+    const Result tooLong = runMpm("run " + sceneFile(longName, R"({"simulation": {"frames": 2, "dx": 0.05},
+        "sets": [{"shape": {"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}}]})") + " -o " + scene + "_long");
+    EXPECT_EQ(tooLong.code, 2);
+    EXPECT_NE(tooLong.output.find("the scene's name (its file's, 240 characters) makes file names of up to"), std::string::npos)
+        << tooLong.output;
+    EXPECT_EQ(tooLong.output.find("frame 1/2"), std::string::npos) << tooLong.output;
     // validate: the summary, and the scene only when asked for.
     const Result plain = runMpm("validate " + scene), printed = runMpm("validate --print-scene " + scene);
     EXPECT_EQ(plain.output.find("\"simulation\""), std::string::npos) << plain.output;

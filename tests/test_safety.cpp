@@ -92,6 +92,19 @@ TEST(Safety, SignalsStopAtASubstepWithACheckpointAndTheRunResumes) {
         ASSERT_EQ(r.code, 0) << r.output;
         expectSameOutput(dir + "/ref", out, "flow");
     }
+    // A second Ctrl-C while the first is being served ends the run at once, and removes the directory's lock file
+    // (left behind, the next run took it over with a warning).
+    const std::string twice = dir + "/twice";
+    Child c = start({"run", scene, "-o", twice, "--quiet"}, dir + "/child.log");
+    while (!hasCheckpoint(twice)) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    ::kill(c.pid, SIGINT);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ::kill(c.pid, SIGINT);
+    EXPECT_EQ(c.wait(), 130);
+    EXPECT_FALSE(fs::exists(twice + "/.mpm.lock"));
+    const Result again = runMpm({"run", scene, "-o", twice, "--quiet"}, dir);
+    EXPECT_EQ(again.code, 0) << again.output;
+    EXPECT_EQ(again.output.find("took over the lock"), std::string::npos) << again.output;
 }
 
 TEST(Safety, CheckpointReadsBackBitForBit) {

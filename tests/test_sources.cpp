@@ -517,6 +517,34 @@ TEST(SceneWarnings, TinySetsSetsInCollidersAndOverlapsAreNamed) {
     buildSimulation(parseScene(text, dir + "/scene.json"), Comm::single(), &derived);
     for (const std::string& s : derived.warnings) EXPECT_NE(std::find(w.begin(), w.end(), s), w.end()) << s;
     EXPECT_EQ(derived.warnings.size(), 2u);  // c tiny, d in the collider
+    // A set that starts after the scene's end, and one under a plane (its normal pointing away): validate and the run
+    // say so, naming the key and what to change. A set of no particle is refused by both.
+    const std::string later = R"({"simulation": {"frames": 10, "dx": 0.02},
+        "sets": [{"material": "water", "start_frame": 10, "shape": {"type": "box", "min": [0, 0.1, 0], "max": [0.2, 0.3, 0.2]}},
+                 {"material": "water", "shape": {"type": "box", "min": [1, -0.3, 0], "max": [1.2, -0.1, 0.2]}}],
+        "colliders": [{"type": "plane"}]})";
+    const std::vector<std::string> late = sceneWarnings(parseScene(later, dir + "/scene.json"));
+    ASSERT_EQ(late.size(), 2u);
+    EXPECT_NE(late[0].find("/sets/0/start_frame: 10 is not before the scene's end (simulation.frames 10"), std::string::npos) << late[0];
+    long long in = 0, of = -1;
+    std::sscanf(late[1].c_str() + late[1].find("/sets/1/shape: "), "/sets/1/shape: %lld of %lld", &in, &of);
+    EXPECT_EQ(in, of) << late[1];  // all of it
+    EXPECT_NE(late[1].find("particles start inside collider 0, a plane whose solid is on the side its normal (0, 1, 0) points away"),
+              std::string::npos) << late[1];
+    EXPECT_NE(late[1].find("turn the plane's normal towards the set"), std::string::npos) << late[1];
+    buildSimulation(parseScene(later, dir + "/scene.json"), Comm::single(), &derived);
+    EXPECT_EQ(derived.warnings, late);
+    const std::string none = R"({"sets": [{"material": "water", "sampling": "lattice", "shape": {"type": "box", "min": [0.001, 0.001, 0.001],
+        "max": [0.002, 0.002, 0.002]}}]})";
+    for (bool run : {false, true}) {
+        try {
+            if (run) buildSimulation(parseScene(none, dir + "/scene.json"));
+            else sceneWarnings(parseScene(none, dir + "/scene.json"));
+            ADD_FAILURE() << "a set of no particle passed " << (run ? "the run" : "validate");
+        } catch (const SceneError& e) {
+            EXPECT_NE(std::string(e.what()).find("/sets/0/shape: no particle fits in the shape at dx = 0.02 m"), std::string::npos) << e.what();
+        }
+    }
     // A scene that touches nothing has none.
     EXPECT_TRUE(sceneWarnings(parseScene(R"({"sets": [{"material": "water", "shape": {"type": "box", "min": [0, 0, 0],
         "max": [0.2, 0.2, 0.2]}}], "colliders": [{"type": "plane"}]})", dir + "/scene.json")).empty());
