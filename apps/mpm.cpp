@@ -127,6 +127,12 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
     installStopHandlers();
     SceneRun job(scenePath, options, events);
     progress.firstFrame = job.startFrame();
+    if (job.startFrame() >= job.lastFrame()) {
+        // A resumed run that had finished: its checkpoint is of the last frame.
+        if (!quiet) std::fprintf(stderr, "mpm: all %d frames of %s are done in %s; nothing to run\n", job.lastFrame(), scenePath.c_str(),
+                                 job.directory().c_str());
+        return kExitOk;
+    }
     if (!quiet)
         std::fprintf(stderr, "mpm: %s, frames %d to %d at %g fps, dx %g m, %d rank%s x %d threads -> %s\n", scenePath.c_str(),
                      job.startFrame() + 1, job.lastFrame(), job.scene().settings.fps, job.scene().settings.dx, comm.size(),
@@ -135,10 +141,13 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
         job.run(&gStopSignal);
     } catch (const Interrupted&) {
         const int sig = gStopSignal.load();
+        // Frames counted as files are: inside frame F + 1, or after frame F's files when between frames.
+        const SimState& at = job.simulation().state();
+        const bool inside = at.frameSubsteps > 0;
         if (speaks)
-            std::fprintf(stderr, "%smpm: stopped by %s at frame %d (t = %g s); the state is in %s\nmpm: resume with: mpm run %s -o %s --resume\n",
-                         progress.tty ? "\n" : "", sig == SIGTERM ? "SIGTERM" : sig == SIGUSR1 ? "SIGUSR1" : "SIGINT", job.simulation().frame(), job.simulation().time(),
-                         job.lastCheckpoint().c_str(), scenePath.c_str(), job.directory().c_str());
+            std::fprintf(stderr, "%smpm: stopped by %s %s frame %d (t = %g s); the state is in %s\nmpm: resume with: mpm run %s -o %s --resume\n",
+                         progress.tty ? "\n" : "", sig == SIGTERM ? "SIGTERM" : sig == SIGUSR1 ? "SIGUSR1" : "SIGINT", inside ? "inside" : "after",
+                         at.frame + (inside ? 1 : 0), at.time, job.lastCheckpoint().c_str(), scenePath.c_str(), job.directory().c_str());
         return kExitSignalBase + (sig ? sig : SIGINT);
     }
     if (progress.tty) std::fprintf(stderr, "\n");

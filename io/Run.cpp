@@ -160,7 +160,8 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     });
     if (comm.distributed() && scene_.output.rankFiles == "per_rank")
         partWriter_ = std::make_unique<FrameWriter>(FrameWriter::partWriter(scene_, layout_, dir_, comm.rank()));
-    if (start_ == 0) writeFrame(0, sim_->measure(), options_.firstFrame == 0 && scene_.output.initialFrame);
+    // The initial state's row (and file 0, if asked for), once: a run restored inside frame 1 has it in its stats.
+    if (start_ == 0 && !restored_) writeFrame(0, sim_->measure(), options_.firstFrame == 0 && scene_.output.initialFrame);
 }
 
 void SceneRun::writeFrame(int frame, const FrameStats& st, bool write) {
@@ -296,8 +297,9 @@ void SceneRun::chooseStart() {
         spread();
         statsSoFar_ = c.info.statsCsv;
         start_ = c.info.frame;
-        events_.note("continuing from " + path + " (frame " + std::to_string(start_) + (c.info.midFrame ? ", inside frame " +
-                     std::to_string(start_ + 1) : "") + ", t = " + std::to_string(c.info.time) + " s)");
+        restored_ = true;
+        events_.note("continuing from " + path + " (" + (c.info.midFrame ? "inside frame " + std::to_string(start_ + 1) : "after frame " + std::to_string(start_)) +
+                     ", t = " + std::to_string(c.info.time) + " s)");
         return;
     }
     if (options_.resume)

@@ -96,6 +96,7 @@ private:
     std::unique_ptr<FrameWriter> partWriter_;  ///< each rank's part files (output.rank_files = "per_rank")
     std::string identity_, hash_, statsSoFar_, lastCheckpoint_;
     int start_ = 0, last_ = 0;
+    bool restored_ = false;  ///< started from a checkpoint
 };
 
 }  // namespace mpm

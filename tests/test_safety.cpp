@@ -92,6 +92,24 @@ TEST(Safety, SignalsStopAtASubstepWithACheckpointAndTheRunResumes) {
         ASSERT_EQ(r.code, 0) << r.output;
         expectSameOutput(dir + "/ref", out, "flow");
     }
+    // Stopped in frame 1, before its files (the signal comes as soon as the run holds its directory): the resumed
+    // run writes the initial state's stats row once, not again with the state it resumed from.
+    const std::string early = dir + "/early";
+    Child first = start({"run", scene, "-o", early}, dir + "/child.log");
+    while (!fs::exists(early + "/.mpm.lock")) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ::kill(first.pid, SIGINT);
+    EXPECT_EQ(first.wait(), 130);
+    const std::string said = first.output();  // frames named as files are: before frame 1's, or inside it
+    EXPECT_TRUE(said.find("stopped by SIGINT after frame 0 ") != std::string::npos ||
+                said.find("stopped by SIGINT inside frame 1 ") != std::string::npos)
+        << said;
+    const Result resumed = runMpm({"run", scene, "-o", early, "--resume"}, dir);
+    ASSERT_EQ(resumed.code, 0) << resumed.output;
+    expectSameOutput(dir + "/ref", early, "flow");
+    // Resuming a run that has finished says so and runs nothing.
+    const Result done = runMpm({"run", scene, "-o", early, "--resume"}, dir);
+    EXPECT_EQ(done.code, 0);
+    EXPECT_NE(done.output.find("all 14 frames of " + scene + " are done in " + early + "; nothing to run"), std::string::npos) << done.output;
     // A second Ctrl-C while the first is being served ends the run at once, and removes the directory's lock file
     // (left behind, the next run took it over with a warning).
     const std::string twice = dir + "/twice";
