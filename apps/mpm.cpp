@@ -133,9 +133,14 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
                                  job.directory().c_str());
         return kExitOk;
     }
+    // The frames written; with --frames A:B the run may first simulate from an earlier frame without writing it.
+    const int firstWritten = std::max(job.startFrame() + 1, options.firstFrame);
+    const std::string from = firstWritten > job.startFrame() + 1
+                                 ? " (simulated from frame " + std::to_string(job.startFrame() + 1) + " on, frames before " + std::to_string(firstWritten) + " not written)"
+                                 : std::string();
     if (!quiet)
-        std::fprintf(stderr, "mpm: %s, frames %d to %d at %g fps, dx %g m, %d rank%s x %d threads -> %s\n", scenePath.c_str(),
-                     job.startFrame() + 1, job.lastFrame(), job.scene().settings.fps, job.scene().settings.dx, comm.size(),
+        std::fprintf(stderr, "mpm: %s, frames %d to %d%s at %g fps, dx %g m, %d rank%s x %d threads -> %s\n", scenePath.c_str(),
+                     firstWritten, job.lastFrame(), from.c_str(), job.scene().settings.fps, job.scene().settings.dx, comm.size(),
                      comm.size() == 1 ? "" : "s", nThreads, job.directory().c_str());
     try {
         job.run(&gStopSignal);

@@ -263,7 +263,7 @@ Simulation::StepBound Simulation::stepBound(bool withCause) const {
     if (!withCause) return {cfl, "", limit};
     std::ostringstream cause;
     cause << "the CFL bound, C dx / (c + |v|max + |g| dt) with ";
-    if (wave) cause << "the wave speed c = " << c << " m/s of species " << stiffest;
+    if (wave) cause << "the wave speed c = " << c << " m/s of set " << stiffest;
     else cause << "the fastest particle, |v| = " << state_.bounds.maxSpeed << " m/s";
     if (guard_.stepScale() < 1.0) cause << ", shortened " << 1.0 / guard_.stepScale() << "x for a retry";
     return {cfl, cause.str(), limit};
@@ -289,8 +289,8 @@ void Simulation::checkCoordinates() const {
             throw LimitExceeded(std::string(reinterpret_cast<const char*>(text.data()), text.size()));
         }
         std::ostringstream msg;
-        msg << "particle id " << P.id[far] << " of species " << std::visit([](const auto& sp) { return sp.name; }, state_.species[s])
-            << " is at (" << P.x[far].transpose() << ") m at frame " << state_.frame << ", beyond the grid's coordinate range of +-"
+        msg << "particle id " << P.id[far] << " of set " << std::visit([](const auto& sp) { return sp.name; }, state_.species[s])
+            << " is at (" << P.x[far].transpose() << ") m in frame " << state_.frame + 1 << ", beyond the grid's coordinate range of +-"
             << limit << " m (2^30 cells of dx = " << settings_.dx << " m); keep the scene nearer the origin or use a larger dx";
         const std::string text = msg.str();
         Bytes b(text.size());

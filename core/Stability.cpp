@@ -95,7 +95,7 @@ void failAt(const SimState& state, const std::string& cause, int s, int32_t id, 
     // Frames counted as their files are, from 1: the one under way. The energy check spans substeps (dt 0): no step to name.
     msg << cause << " in frame " << state.frame + 1 << " (substep " << state.substeps << " of the run, t = " << state.time << " s";
     if (dt > 0.0) msg << ", dt = " << dt << " s";
-    msg << "): particle id " << id << " of species " << std::visit([](const auto& sp) { return sp.name; }, state.species[s]);
+    msg << "): particle id " << id << " of set " << std::visit([](const auto& sp) { return sp.name; }, state.species[s]);
     throw SimulationError(msg.str());
 }
 

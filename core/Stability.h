@@ -110,7 +110,7 @@ private:
     double stepScale_ = 1.0;
 };
 
-/// Throws SimulationError: "<cause> at frame F, substep S (t = T s, dt = DT s): particle id I of species NAME".
+/// Throws SimulationError: "<cause> in frame F (substep S of the run, t = T s[, dt = DT s]): particle id I of set NAME".
 [[noreturn]] void failAt(const SimState& state, const std::string& cause, int species, int32_t id, double dt);
 
 }  // namespace mpm

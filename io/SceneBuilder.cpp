@@ -457,27 +457,29 @@ constexpr double kMostlyInside = 0.5;
     throw SceneError(what.str());
 }
 
-/// Set i's word on when it enters: starting at or after the scene's end, it never appears.
+/// Set i's word on when it enters: starting after the scene's last frame, it never appears.
 void entryWarnings(const SceneDesc& scene, std::size_t i, std::vector<std::string>& out) {
     const int start = scene.sets[i].startFrame, frames = scene.frames;
-    if (start < frames) return;
+    if (start <= frames) return;
     out.push_back(scene.file + ": /sets/" + std::to_string(i) + "/start_frame: " + std::to_string(start) +
-                  " is not before the scene's end (simulation.frames " + std::to_string(frames) +
-                  "; a set starting at F is in the files from F + 1 on): the set never appears; give a start_frame under " +
+                  " is after the scene's last frame (simulation.frames " + std::to_string(frames) +
+                  "; a set starting at F is in the files from file F on): the set never appears; give a start_frame of at most " +
                   std::to_string(frames) + " or more frames");
 }
 
 /// Set i's word on its own sampling (n particles in all) and on each collider it starts inside of: `inside[c]` of
 /// its particles lie inside collider c at its start.
-void setWarnings(const SceneDesc& scene, std::size_t i, long long n, const std::vector<long long>& inside, std::vector<std::string>& out) {
+/// `estimated`: the counts come from a coarser sampling of the set (it is too large to sample whole).
+void setWarnings(const SceneDesc& scene, std::size_t i, long long n, const std::vector<long long>& inside, std::vector<std::string>& out,
+                 bool estimated = false) {
     const std::string where = scene.file + ": /sets/" + std::to_string(i);
     if (n < kFewParticles)
         out.push_back(where + ": only " + std::to_string(n) + " particles; so small a body is a few cells across (raise "
                                                                "particles_per_cell or use a smaller dx)");
     for (std::size_t c = 0; c < inside.size(); ++c) {
         if (double(inside[c]) <= kNoticeableShare * double(n)) continue;
-        std::string what = where + "/shape: " + std::to_string(inside[c]) + " of " + std::to_string(n) + " particles start inside collider " +
-                           std::to_string(c);
+        std::string what = where + "/shape: " + (estimated ? "about " : "") + std::to_string(inside[c]) + " of " + std::to_string(n) +
+                           " particles start inside collider " + std::to_string(c);
         if (const auto* plane = std::get_if<Plane>(&scene.colliders[c].shape)) {
             std::ostringstream normal;
             normal << plane->normal[0] << ", " << plane->normal[1] << ", " << plane->normal[2];
@@ -526,8 +528,23 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
         double volume = 0.0;
         Vec3d lo, hi;
         setExtent(scene, i, volume, lo, hi);
-        const double dx = scene.settings.dx;
-        if ((d.count > 0 ? double(d.count) : volume / (dx * dx * dx) * d.particlesPerCell) > kSampleUpTo) continue;
+        const double dx = scene.settings.dx, expected = d.count > 0 ? double(d.count) : volume / (dx * dx * dx) * d.particlesPerCell;
+        if (expected > kSampleUpTo) {
+            // Too many to sample (and to pair with the other sets): a coarser sampling of the same shape gives the share
+            // that starts inside a collider, which a set of a mistaken size is most likely to.
+            if (std::holds_alternative<PointsShape>(d.shape)) continue;
+            constexpr double kCoarseSample = 1e5;
+            SceneDesc coarse = scene;
+            ParticleSetDesc& c = coarse.sets[i];
+            c.particlesPerCell *= kCoarseSample / expected;
+            if (c.count > 0) c.count = (long long)kCoarseSample;
+            const std::vector<Vec3d> few = sampleSet(coarse, i).positions;
+            if (few.empty()) continue;
+            std::vector<long long> inside = countInside(scene, i, few, colliders);
+            for (long long& k : inside) k = std::llround(double(k) * expected / double(few.size()));
+            setWarnings(scene, i, (long long)expected, inside, out, true);
+            continue;
+        }
         positions[i] = sampleSet(scene, i).positions;
         if (positions[i].empty()) noParticleFits(scene, i);
         setWarnings(scene, i, (long long)positions[i].size(), countInside(scene, i, positions[i], colliders), out);

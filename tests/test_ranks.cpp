@@ -140,7 +140,7 @@ TEST(Ranks, ABlowUpOnOneRankIsReportedOnceAndEveryRankExitsOne) {
         return at == std::string::npos ? std::string() : s.substr(at, s.find('\n', at) - at);
     };
     EXPECT_EQ(line(out), line(one.output));
-    EXPECT_NE(line(one.output).find("of species stiff"), std::string::npos) << one.output;
+    EXPECT_NE(line(one.output).find("of set stiff"), std::string::npos) << one.output;
 }
 
 TEST(Ranks, ACheckpointOfTwoRanksResumesOnThreeWithTheBitsOfAnUninterruptedRun) {

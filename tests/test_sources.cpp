@@ -520,12 +520,35 @@ TEST(SceneWarnings, TinySetsSetsInCollidersAndOverlapsAreNamed) {
     // A set that starts after the scene's end, and one under a plane (its normal pointing away): validate and the run
     // say so, naming the key and what to change. A set of no particle is refused by both.
     const std::string later = R"({"simulation": {"frames": 10, "dx": 0.02},
-        "sets": [{"material": "water", "start_frame": 10, "shape": {"type": "box", "min": [0, 0.1, 0], "max": [0.2, 0.3, 0.2]}},
+        "sets": [{"material": "water", "start_frame": 11, "shape": {"type": "box", "min": [0, 0.1, 0], "max": [0.2, 0.3, 0.2]}},
                  {"material": "water", "shape": {"type": "box", "min": [1, -0.3, 0], "max": [1.2, -0.1, 0.2]}}],
         "colliders": [{"type": "plane"}]})";
     const std::vector<std::string> late = sceneWarnings(parseScene(later, dir + "/scene.json"));
     ASSERT_EQ(late.size(), 2u);
-    EXPECT_NE(late[0].find("/sets/0/start_frame: 10 is not before the scene's end (simulation.frames 10"), std::string::npos) << late[0];
+    EXPECT_NE(late[0].find("/sets/0/start_frame: 11 is after the scene's last frame (simulation.frames 10"), std::string::npos) << late[0];
+    // A set too large to sample (a radius of 2 for 0.02), 84.4% below the floor (a sphere of radius 2 whose centre is 1 below
+    // the plane: all but a cap of height 1, pi h^2 (3 r - h) / 3): a coarser sampling counts it, to the share of the volume
+    // (measured: 0.1% off; the bound is ten times that).
+    {
+        const std::vector<std::string> big = sceneWarnings(parseScene(R"({"sets": [{"material": "water", "shape": {"type": "sphere",
+            "center": [0, -1, 0], "radius": 2}}], "colliders": [{"type": "plane"}]})", dir + "/scene.json"));
+        ASSERT_EQ(big.size(), 1u);
+        long long under = 0, all = 0;
+        std::sscanf(big[0].c_str() + big[0].find("/sets/0/shape: "), "/sets/0/shape: about %lld of %lld", &under, &all);
+        const double r = 2.0, h = 1.0, share = 1.0 - M_PI * h * h * (3 * r - h) / 3.0 / (4.0 / 3.0 * M_PI * r * r * r);
+        EXPECT_NEAR(double(under) / double(all), share, 0.01) << big[0];
+    }
+    // Starting at the last frame it is in the last file: no word, and there it is at the end of the run.
+    {
+        const SceneDesc atEnd = parseScene(R"({"simulation": {"frames": 3, "dx": 0.05}, "sets": [{"material": "water", "start_frame": 3,
+            "shape": {"type": "box", "min": [0, 0.1, 0], "max": [0.2, 0.3, 0.2]}}], "colliders": [{"type": "plane"}]})",
+                                           dir + "/scene.json");
+        EXPECT_TRUE(sceneWarnings(atEnd).empty());
+        auto sim = buildSimulation(atEnd);
+        sim->emitDue();
+        for (int f = 0; f < 3; ++f) sim->advanceFrame();
+        EXPECT_GT(particlesOf(sim->species()[0]).size(), 0u);
+    }
     long long in = 0, of = -1;
     std::sscanf(late[1].c_str() + late[1].find("/sets/1/shape: "), "/sets/1/shape: %lld of %lld", &in, &of);
     EXPECT_EQ(in, of) << late[1];  // all of it
