@@ -17,11 +17,13 @@
 #include <fstream>
 #include <map>
 #include <random>
+#include <set>
 #include <sstream>
 #include <thread>
 
 #include "io/Checkpoint.h"
 #include "io/Output.h"
+#include "io/PointFile.h"
 #include "io/SceneBuilder.h"
 #include "io/SceneReader.h"
 #include "io/VdbWriter.h"
@@ -72,6 +74,22 @@ TEST(Safety, KilledRunsResumeWithTheBitsOfAnUninterruptedRun) {
             EXPECT_NE(r.output.find("took over the lock"), std::string::npos) << r.output;
             expectSameOutput(dir + "/ref", out, "flow");
         }
+    // Killed before its first checkpoint (as soon as it holds its directory): there is nothing to resume, and says so;
+    // a fresh run takes the directory over and writes the uninterrupted run's bits.
+    const std::string early = dir + "/killed_early";
+    Child c = start({"run", scene, "-o", early, "--quiet"}, dir + "/child.log");
+    while (!fs::exists(early + "/.mpm.lock")) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ::kill(c.pid, SIGKILL);
+    c.wait();
+    if (!hasCheckpoint(early)) {
+        const Result resume = runMpm({"run", scene, "-o", early, "--resume"}, dir);
+        EXPECT_EQ(resume.code, 2) << resume.output;
+        EXPECT_NE(resume.output.find("no usable checkpoint of scene flow to resume from; run without --resume"), std::string::npos)
+            << resume.output;
+    }
+    const Result fresh = runMpm({"run", scene, "-o", early}, dir);
+    ASSERT_EQ(fresh.code, 0) << fresh.output;
+    expectSameOutput(dir + "/ref", early, "flow");
 }
 
 TEST(Safety, SignalsStopAtASubstepWithACheckpointAndTheRunResumes) {
@@ -271,27 +289,74 @@ TEST(Safety, ASceneWhoseNameExtendsAnothersCannotRunIntoItsDirectory) {
     EXPECT_EQ(after, before);
 }
 
-TEST(Safety, AFullDiskFailsNamingTheFileAndKeepsEveryFrameWhole) {
+namespace {
+/// What a run into a tmpfs of `kb` KiB met: the kind of the file it could not write ("vdb", "ply", "mpmc", "stats.csv";
+/// "" when it finished). Checks what a full disk must leave: exit 1 naming the file, no temporary file, every file under
+/// a final name whole (frames, point files, checkpoints), stats.csv of whole rows, one per frame from 0.
+std::string fillDisk(const std::string& dir, const std::string& scene, int kb) {
+    const std::string mnt = dir + "/disk" + std::to_string(kb);
+    fs::create_directories(mnt);
+    if (::mount("tmpfs", mnt.c_str(), "tmpfs", 0, ("size=" + std::to_string(kb) + "k").c_str()) != 0) {
+        ADD_FAILURE() << "cannot mount a tmpfs: " << std::strerror(errno);
+        return "";
+    }
+    const std::string out = mnt + "/out";
+    const Result r = runMpm({"run", scene, "-o", out, "--quiet"}, dir);
+    std::string kind;
+    const std::string prefix = "cannot write " + out + "/";
+    if (const auto at = r.output.find(prefix); at != std::string::npos) {
+        const std::string file = r.output.substr(at + prefix.size(), r.output.find(':', at + prefix.size()) - at - prefix.size());
+        kind = file == "stats.csv" ? file : file.substr(file.rfind('.') + 1);
+        EXPECT_EQ(r.code, 1) << r.output;
+        EXPECT_NE(r.output.find("No space left on device"), std::string::npos) << r.output;
+    } else {
+        EXPECT_EQ(r.code, 0) << kb << " KiB: " << r.output;
+    }
+    for (const auto& e : fs::directory_iterator(out)) {
+        const std::string path = e.path().string(), ext = e.path().extension().string();
+        EXPECT_EQ(path.find(".tmp"), std::string::npos) << path;
+        if (ext == ".vdb") EXPECT_NO_THROW(readVdbPoints(path)) << path;
+        if (ext == ".ply") EXPECT_NO_THROW(readPlyPoints(path)) << path;
+        if (ext == ".mpmc") EXPECT_NO_THROW(readCheckpoint(path)) << path;
+    }
+    const std::string csv = readFile(out + "/stats.csv");
+    EXPECT_EQ(csv.back(), '\n') << kb << " KiB: stats.csv ends inside a row";
+    int expected = 0;
+    for (const auto& [frame, row] : statsRows(csv)) EXPECT_EQ(frame, expected++) << kb << " KiB";
+    ::umount(mnt.c_str());
+    return kind;
+}
+}  // namespace
+
+TEST(Safety, AFullDiskFailsNamingTheFileAndKeepsEveryFileWhole) {
     if (::geteuid() != 0) GTEST_SKIP() << "mounting a small tmpfs needs root; run the suite as root to check a full disk";
     const std::string dir = tempDir("full");
-    const std::string mnt = dir + "/disk";
-    fs::create_directories(mnt);
-    if (::mount("tmpfs", mnt.c_str(), "tmpfs", 0, "size=1m") != 0)
-        GTEST_SKIP() << "cannot mount a tmpfs here (" << std::strerror(errno) << "); the full-disk check needs one";
     const std::string scene = writeFile(dir + "/flow.json", kScene);
-    const Result r = runMpm({"run", scene, "-o", mnt + "/out", "--quiet"}, dir);
-    EXPECT_EQ(r.code, 1) << r.output;
-    EXPECT_NE(r.output.find("No space left on device"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find(mnt + "/out/flow_"), std::string::npos) << r.output;  // names the file
-    int frames = 0;
-    for (const auto& e : fs::directory_iterator(mnt + "/out")) {
-        EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
-        if (e.path().extension() != ".vdb") continue;
-        EXPECT_NO_THROW(readVdbPoints(e.path().string())) << e.path();  // every file under a final name is whole
-        ++frames;
+    {
+        const std::string probe = dir + "/probe";
+        fs::create_directories(probe);
+        if (::mount("tmpfs", probe.c_str(), "tmpfs", 0, "size=64k") != 0)
+            GTEST_SKIP() << "cannot mount a tmpfs here (" << std::strerror(errno) << "); the full-disk check needs one";
+        ::umount(probe.c_str());
     }
-    EXPECT_GT(frames, 0);
-    ::umount(mnt.c_str());
+    // Frame 1 writes flow_0001.vdb, flow_0001.ply, stats.csv, then its checkpoint: the disk fills in each in turn as
+    // it grows. Where it fills in stats.csv is one size (a page) wide: found by bisection between the largest disk
+    // that fills in the PLY file and the smallest that gets past stats.csv.
+    std::set<std::string> met;
+    int lo = 64, hi = 2048;  // KiB: the first fills in frame 1's VDB file, the second gets past stats.csv
+    met.insert(fillDisk(dir, scene, lo));
+    while (hi - lo > 4) {
+        const int mid = (lo + hi) / 8 * 4;
+        const std::string kind = fillDisk(dir, scene, mid);
+        met.insert(kind);
+        if (kind == "vdb" || kind == "ply") lo = mid;
+        else hi = mid;
+        if (kind == "stats.csv") break;
+    }
+    // One page past the disk that fills in stats.csv, the checkpoint written next is the one that does not fit.
+    met.insert(fillDisk(dir, scene, hi));
+    met.insert(fillDisk(dir, scene, hi + 4));
+    for (const char* kind : {"vdb", "ply", "stats.csv", "mpmc"}) EXPECT_TRUE(met.count(kind)) << "no disk filled in a " << kind << " file";
 }
 
 namespace {
