@@ -208,7 +208,9 @@ TEST(Cli, ValidateGivesTheRunTimeAndWarnsOfAScaleMistakeWithinSeconds) {
         "shape": {"type": "sphere", "center": [0, 2.1, 0], "radius": 2.0}}], "colliders": [{"type": "plane"}]})");
     const auto start = std::chrono::steady_clock::now();
     const Result r = runMpm("validate " + big);
-    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0);
+    // About a second in Release here; the bound holds under the sanitizers on a loaded machine. Sampling the ball whole
+    // (33.5 million particles) takes minutes.
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 60.0);
     EXPECT_EQ(r.code, 0) << r.output;
     EXPECT_NE(r.output.find("run time: about "), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("frames written, at costs measured now on water"), std::string::npos) << r.output;
