@@ -1,6 +1,7 @@
 #include "io/RunEstimate.h"
 
 #include <tbb/task_arena.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -77,17 +78,21 @@ void estimateRunTime(const SceneDesc& scene, SceneBudget& budget) {
     // Two blocks, 512 and 4,096 cells: the fixed cost of a step shows in the small one, the cost per particle in
     // the difference. A tenth of a second of substeps each keeps validate quick.
     constexpr double kSmall = 0.16, kLarge = 0.32, kSeconds = 0.1;
-    const fs::path dir = fs::temp_directory_path() / ("mpm_estimate_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
+    fs::path dir;
     Measured small, large;
+    std::error_code ec;
     try {
+        dir = fs::temp_directory_path() / ("mpm_estimate_" + std::to_string(::getpid()));
+        fs::create_directories(dir);
         small = measureBlock(scene, kSmall, kSeconds, dir.string());
         large = measureBlock(scene, kLarge, kSeconds, dir.string());
-    } catch (...) {
-        fs::remove_all(dir);
-        throw;
+    } catch (const std::exception&) {
+        // The estimate is an aid: a machine where the blocks cannot be written (a full or read-only temporary
+        // folder) validates the scene without it.
+        if (!dir.empty()) fs::remove_all(dir, ec);
+        return;
     }
-    fs::remove_all(dir);
+    fs::remove_all(dir, ec);
     const Cost step = Cost::through(small.particles, small.substepSeconds, large.particles, large.substepSeconds);
     const Cost write = Cost::through(small.particles, small.writeSeconds, large.particles, large.writeSeconds);
     // The run's frames, substeps, and particles summed over frames (its particle-substeps over a frame's substeps).
