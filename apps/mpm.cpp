@@ -67,7 +67,9 @@ RunOptions parseFrames(const std::string& text, RunOptions o) {
         o.firstFrame = colon == 0 ? 0 : std::stoi(text.substr(0, colon));
         o.lastFrame = colon + 1 == text.size() ? -1 : std::stoi(text.substr(colon + 1));
     } catch (const std::exception&) {
-        throw SceneError("--frames: expected A:B with whole numbers, frames counted from 1 as files are (for example 1:48), got \"" + text + "\"");
+        throw SceneError(
+            "--frames: expected A:B with whole numbers, frames counted from 1 as files are (for example 1:48), got \"" + text +
+            "\"");
     }
     if (o.firstFrame < 0 || (o.lastFrame >= 0 && o.lastFrame < o.firstFrame))
         throw SceneError("--frames: need 0 <= A <= B, got \"" + text + "\"");
@@ -98,8 +100,8 @@ struct Progress {
             std::fprintf(stderr, "\rframe %d/%d | %d substeps | %zu particles | %.3g particle-substeps/s | ETA %s   ", f, last,
                          st.substeps, st.particles, pss, clock(eta).c_str());
         else
-            std::fprintf(stderr, "frame %d/%d substeps %d particles %zu max_speed %.3g sim %.2fs write %.2fs pss %.3g eta %s\n", f,
-                         last, st.substeps, st.particles, st.maxSpeed, st.wallSeconds, writeSeconds, pss, clock(eta).c_str());
+            std::fprintf(stderr, "frame %d/%d substeps %d particles %zu max_speed %.3g sim %.2fs write %.2fs pss %.3g eta %s\n",
+                         f, last, st.substeps, st.particles, st.maxSpeed, st.wallSeconds, writeSeconds, pss, clock(eta).c_str());
         if (st.retries)
             std::fprintf(stderr, "%smpm: frame %d was restarted %d times with half the time step (stability retries)\n",
                          tty ? "\n" : "", f, st.retries);
@@ -129,14 +131,16 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
     progress.firstFrame = job.startFrame();
     if (job.startFrame() >= job.lastFrame()) {
         // A resumed run that had finished: its checkpoint is of the last frame.
-        if (!quiet) std::fprintf(stderr, "mpm: all %d frames of %s are done in %s; nothing to run\n", job.lastFrame(), scenePath.c_str(),
-                                 job.directory().c_str());
+        if (!quiet)
+            std::fprintf(stderr, "mpm: all %d frames of %s are done in %s; nothing to run\n", job.lastFrame(), scenePath.c_str(),
+                         job.directory().c_str());
         return kExitOk;
     }
     // The frames written; with --frames A:B the run may first simulate from an earlier frame without writing it.
     const int firstWritten = std::max(job.startFrame() + 1, options.firstFrame);
     const std::string from = firstWritten > job.startFrame() + 1
-                                 ? " (simulated from frame " + std::to_string(job.startFrame() + 1) + " on, frames before " + std::to_string(firstWritten) + " not written)"
+                                 ? " (simulated from frame " + std::to_string(job.startFrame() + 1) + " on, frames before " +
+                                       std::to_string(firstWritten) + " not written)"
                                  : std::string();
     if (!quiet)
         std::fprintf(stderr, "mpm: %s, frames %d to %d%s at %g fps, dx %g m, %d rank%s x %d threads -> %s\n", scenePath.c_str(),
@@ -150,9 +154,15 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
         const SimState& at = job.simulation().state();
         const bool inside = at.frameSubsteps > 0;
         if (speaks)
-            std::fprintf(stderr, "%smpm: stopped by %s %s frame %d (t = %g s); the state is in %s\nmpm: resume with: mpm run %s -o %s --resume\n",
-                         progress.tty ? "\n" : "", sig == SIGTERM ? "SIGTERM" : sig == SIGUSR1 ? "SIGUSR1" : "SIGINT", inside ? "inside" : "after",
-                         at.frame + (inside ? 1 : 0), at.time, job.lastCheckpoint().c_str(), scenePath.c_str(), job.directory().c_str());
+            std::fprintf(
+                stderr,
+                "%smpm: stopped by %s %s frame %d (t = %g s); the state is in %s\nmpm: resume with: mpm run %s -o %s --resume\n",
+                progress.tty ? "\n" : "",
+                sig == SIGTERM   ? "SIGTERM"
+                : sig == SIGUSR1 ? "SIGUSR1"
+                                 : "SIGINT",
+                inside ? "inside" : "after", at.frame + (inside ? 1 : 0), at.time, job.lastCheckpoint().c_str(),
+                scenePath.c_str(), job.directory().c_str());
         return kExitSignalBase + (sig ? sig : SIGINT);
     }
     if (progress.tty) std::fprintf(stderr, "\n");
@@ -267,11 +277,14 @@ int cli(int argc, char** argv) {
     runCmd->add_flag("--force", force, "with --resume: continue even though the scene changed since the checkpoint");
     runCmd->add_flag("--quiet", quiet, "print nothing but errors and warnings");
 
-    CLI::App* validateCmd = app.add_subcommand("validate", "check a scene, print it with every default filled in and what it will cost");
+    CLI::App* validateCmd =
+        app.add_subcommand("validate", "check a scene, print it with every default filled in and what it will cost");
     validateCmd->add_option("scene", scenePath, "scene file (JSON)");
     validateCmd->add_flag("--explain", explain, "list every scene field, its default and allowed values");
     bool strict = false, printScene = false;
-    validateCmd->add_flag("--strict", strict, "exit 2 on warnings too (a tiny set, a set inside a collider, overlapping sets, thin mesh walls, a set after the last frame)");
+    validateCmd->add_flag("--strict", strict,
+                          "exit 2 on warnings too (a tiny set, a set inside a collider, overlapping sets, thin mesh walls, a set "
+                          "after the last frame)");
     validateCmd->add_flag("--print-scene", printScene,
                           "print the scene with every default stated (as a run writes it to scene.json) on standard output");
 

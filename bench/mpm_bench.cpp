@@ -79,7 +79,8 @@ double slowestBlockPss(const std::vector<double>& each, double particles) {
     const std::size_t block = std::min<std::size_t>(kReportBlock, each.size());
     double slowest = 0.0;
     for (std::size_t b = 0; b + block <= each.size(); b += block)
-        slowest = std::max(slowest, std::accumulate(each.begin() + std::ptrdiff_t(b), each.begin() + std::ptrdiff_t(b + block), 0.0));
+        slowest =
+            std::max(slowest, std::accumulate(each.begin() + std::ptrdiff_t(b), each.begin() + std::ptrdiff_t(b + block), 0.0));
     return particles * double(block) / slowest;
 }
 
@@ -233,14 +234,16 @@ std::string measureRanks(const Options& o) {
     // A rank's memory: its particles' arrays and its grid (ghost leaves included).
     double held = double(sim->grid().memoryBytes());
     for (const AnySpecies& sp : sim->species())
-        std::visit([&](const auto& x) { x.forEachArray([&](const auto& arr) { held += double(arr.capacity() * sizeof(arr[0])); }); }, sp);
+        std::visit(
+            [&](const auto& x) { x.forEachArray([&](const auto& arr) { held += double(arr.capacity() * sizeof(arr[0])); }); },
+            sp);
     const double ghostMemoryShare = comm.max(ghosts * double(SparseGrid::bytesPerLeaf()) / held);
     const double mine = double(sim->particleCount());
     const double imbalance = comm.max(mine) / (n / comm.size());
     std::ostringstream row;
-    row << "ranks," << o.scene.material << ',' << long(n) << ',' << comm.size() << ',' << o.threads << ',' << o.substeps << ',' << sec
-        << ',' << n / median(each) << ',' << sent << ',' << commShare << ',' << ghostLeafShare << ',' << ghostMemoryShare << ','
-        << imbalance << ',' << sim->rebalanceCount();
+    row << "ranks," << o.scene.material << ',' << long(n) << ',' << comm.size() << ',' << o.threads << ',' << o.substeps << ','
+        << sec << ',' << n / median(each) << ',' << sent << ',' << commShare << ',' << ghostLeafShare << ',' << ghostMemoryShare
+        << ',' << imbalance << ',' << sim->rebalanceCount();
     return row.str();
 }
 

@@ -49,10 +49,12 @@ LevelSet::LevelSet(std::shared_ptr<const Grid> grid, double reach) : grid_(std::
             it.getBoundingBox(box);
             for (int x = box.min().x() >> kCoarseLog2; x <= box.max().x() >> kCoarseLog2; ++x)
                 for (int y = box.min().y() >> kCoarseLog2; y <= box.max().y() >> kCoarseLog2; ++y)
-                    for (int z = box.min().z() >> kCoarseLog2; z <= box.max().z() >> kCoarseLog2; ++z) acc.setValueOn(openvdb::Coord(x, y, z));
+                    for (int z = box.min().z() >> kCoarseLog2; z <= box.max().z() >> kCoarseLog2; ++z)
+                        acc.setValueOn(openvdb::Coord(x, y, z));
         }
     const int grow = int(std::ceil(reach / cell)) + 1;
-    openvdb::tools::dilateActiveValues(near->mask->tree(), grow, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    openvdb::tools::dilateActiveValues(near->mask->tree(), grow, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
     near_ = near;
 }
 
@@ -70,11 +72,9 @@ void LevelSet::insideBounds(Vec3d& lo, Vec3d& hi) const {
         }
     lo = Vec3d::Constant(INFINITY), hi = Vec3d::Constant(-INFINITY);
     if (box.empty()) return;
-    for (int c = 0; c < 8; ++c) {
-        const openvdb::Vec3d p = g.indexToWorld(openvdb::Vec3d((c & 1) ? box.max().x() : box.min().x(), (c & 2) ? box.max().y() : box.min().y(),
-                                                               (c & 4) ? box.max().z() : box.min().z()));
-        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
-    }
+    const openvdb::BBoxd world = g.transform().indexToWorld(openvdb::BBoxd(box.min().asVec3d(), box.max().asVec3d()));
+    lo = Vec3d(world.min().x(), world.min().y(), world.min().z());
+    hi = Vec3d(world.max().x(), world.max().y(), world.max().z());
 }
 
 struct LevelSet::Sampler::Impl {
@@ -85,7 +85,11 @@ struct LevelSet::Sampler::Impl {
     const openvdb::math::Transform& xform;
     double invCoarse;
     Impl(const openvdb::FloatGrid& g, const openvdb::MaskGrid& near)
-        : grid(g), acc(g.getConstAccessor()), invVoxel(1.0 / g.voxelSize()[0]), nearAcc(near.getConstAccessor()), xform(g.transform()),
+        : grid(g),
+          acc(g.getConstAccessor()),
+          invVoxel(1.0 / g.voxelSize()[0]),
+          nearAcc(near.getConstAccessor()),
+          xform(g.transform()),
           invCoarse(1.0 / double(1 << kCoarseLog2)) {}
 
     /// The 8 values around x and its fractional position among them.

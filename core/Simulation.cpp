@@ -43,7 +43,8 @@ Simulation::Simulation(const SimulationSettings& settings)
     : settings_(settings), guard_(settings.stability, settings.gravity.norm(), settings.dx), comm_(&Comm::single()) {
     fields_.resize(1);
     fieldSpecies_.resize(1);
-    withKernel(settings_.transfer.interpolation, [&]<class K>() { fields_[0].configure(settings_.dx, K::kBaseShift, K::kWidth); });
+    withKernel(settings_.transfer.interpolation,
+               [&]<class K>() { fields_[0].configure(settings_.dx, K::kBaseShift, K::kWidth); });
 }
 
 float Simulation::kernelInertiaScale() const {
@@ -136,10 +137,14 @@ void Simulation::appendParticles(int s, const std::vector<Vec3d>& x, const Vec3f
             P.v.resize(n0 + n, v);
             for (std::size_t i = 0; i < perParticle.size(); ++i) P.v[n0 + i] += perParticle[i];
             P.C.resize(n0 + n, Mat3f::Zero());
-            if (masses.empty()) P.mass.resize(n0 + n, mass);
-            else P.mass.insert(P.mass.end(), masses.begin(), masses.end());
-            if (volumes.empty()) P.volume0.resize(n0 + n, volume);
-            else P.volume0.insert(P.volume0.end(), volumes.begin(), volumes.end());
+            if (masses.empty())
+                P.mass.resize(n0 + n, mass);
+            else
+                P.mass.insert(P.mass.end(), masses.begin(), masses.end());
+            if (volumes.empty())
+                P.volume0.resize(n0 + n, volume);
+            else
+                P.volume0.insert(P.volume0.end(), volumes.begin(), volumes.end());
             P.set.resize(n0 + n, set);
             P.id.insert(P.id.end(), ids.begin(), ids.end());
             // A model whose rest state depends on its parameters (sand's cone) takes them.
@@ -157,8 +162,8 @@ void Simulation::appendParticles(int s, const std::vector<Vec3d>& x, const Vec3f
 
 void Simulation::restore(SimState state, bool share) {
     if (state.streamFlow.size() != emitters_.size() || state.streamLayers.size() != emitters_.size())
-        throw std::invalid_argument("restore: the state has " + std::to_string(state.streamFlow.size()) + " emitters' progress, the simulation " +
-                                    std::to_string(emitters_.size()) + " emitters");
+        throw std::invalid_argument("restore: the state has " + std::to_string(state.streamFlow.size()) +
+                                    " emitters' progress, the simulation " + std::to_string(emitters_.size()) + " emitters");
     if (state.species.size() != state_.species.size())
         throw std::invalid_argument("restore: the state has " + std::to_string(state.species.size()) +
                                     " species, the simulation " + std::to_string(state_.species.size()));
@@ -232,7 +237,7 @@ double Simulation::cflTimeStep() const {
 double Simulation::displacementTimeStep() const {
     const double speed = double(state_.bounds.maxSpeed);
     return settings_.maxDisplacement > 0.0 && speed > 0.0 ? settings_.maxDisplacement * settings_.dx / speed
-                                                           : std::numeric_limits<double>::infinity();
+                                                          : std::numeric_limits<double>::infinity();
 }
 
 Simulation::StepBound Simulation::stepBound(bool withCause) const {
@@ -263,8 +268,10 @@ Simulation::StepBound Simulation::stepBound(bool withCause) const {
     if (!withCause) return {cfl, "", limit};
     std::ostringstream cause;
     cause << "the CFL bound, C dx / (c + |v|max + |g| dt) with ";
-    if (wave) cause << "the wave speed c = " << c << " m/s of set " << stiffest;
-    else cause << "the fastest particle, |v| = " << state_.bounds.maxSpeed << " m/s";
+    if (wave)
+        cause << "the wave speed c = " << c << " m/s of set " << stiffest;
+    else
+        cause << "the fastest particle, |v| = " << state_.bounds.maxSpeed << " m/s";
     if (guard_.stepScale() < 1.0) cause << ", shortened " << 1.0 / guard_.stepScale() << "x for a retry";
     return {cfl, cause.str(), limit};
 }
@@ -290,8 +297,9 @@ void Simulation::checkCoordinates() const {
         }
         std::ostringstream msg;
         msg << "particle id " << P.id[far] << " of set " << std::visit([](const auto& sp) { return sp.name; }, state_.species[s])
-            << " is at (" << P.x[far].transpose() << ") m in frame " << state_.frame + 1 << ", beyond the grid's coordinate range of +-"
-            << limit << " m (2^30 cells of dx = " << settings_.dx << " m); keep the scene nearer the origin or use a larger dx";
+            << " is at (" << P.x[far].transpose() << ") m in frame " << state_.frame + 1
+            << ", beyond the grid's coordinate range of +-" << limit << " m (2^30 cells of dx = " << settings_.dx
+            << " m); keep the scene nearer the origin or use a larger dx";
         const std::string text = msg.str();
         Bytes b(text.size());
         std::memcpy(b.data(), text.data(), text.size());
@@ -397,8 +405,10 @@ void Simulation::bin() {
                 rl.ghostsFrom.resize(std::size_t(comm_->size()));
                 for (std::size_t l = 0; l < grid.leafCount(); ++l) {
                     const int owner = ownerOf(leafOfNode(grid.leaf(l).origin));
-                    if (owner == comm_->rank()) rl.owned[l] = 1;
-                    else rl.ghostsFrom[std::size_t(owner)].push_back(uint32_t(l));
+                    if (owner == comm_->rank())
+                        rl.owned[l] = 1;
+                    else
+                        rl.ghostsFrom[std::size_t(owner)].push_back(uint32_t(l));
                 }
                 rl.ghostsFor.assign(std::size_t(comm_->size()), {});
                 for (std::size_t r = 0; r < rl.ghostCoordsFor.size(); ++r)
@@ -520,7 +530,9 @@ SurfaceContact Simulation::surfaceContact(std::size_t field) {
             double mass = 0.0, volume = 0.0;
             for (int d = 0; d < kNeighbours; ++d) {
                 const uint32_t source = grid.sources(l)[std::size_t(d)];
-                const Sums& sums = source != SparseGrid::kNoLeaf ? own[source] : remote.empty() ? Sums{} : remote[l][std::size_t(d)];
+                const Sums& sums = source != SparseGrid::kNoLeaf ? own[source]
+                                   : remote.empty()              ? Sums{}
+                                                                 : remote[l][std::size_t(d)];
                 mass += sums.mass, volume += sums.volume;
             }
             if (volume > 0.0) cellMass[l] = float(mass / volume * cell);
@@ -570,7 +582,8 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     } else {
         // Bodies of their own: velocities in every field, then the contact between them, then the colliders.
         static const std::vector<std::unique_ptr<Collider>> kNone;
-        for (std::size_t f = 0; f < fields_.size(); ++f) updateGridVelocities(fields_[f], kNone, g, dt, tEnd, SurfaceContact{}, true, owned(f));
+        for (std::size_t f = 0; f < fields_.size(); ++f)
+            updateGridVelocities(fields_[f], kNone, g, dt, tEnd, SurfaceContact{}, true, owned(f));
         RemoteFields remote;
         if (ranks) {
             for (std::size_t f = 0; f < fields_.size(); ++f) remote.owned.push_back(owned(f));
@@ -584,7 +597,8 @@ GridUpdateResult Simulation::updateGrid(float dt) {
         }
         resolveFieldContact(fields_, settings_.contactFriction, ranks ? &remote : nullptr);
         for (std::size_t f = 0; f < fields_.size(); ++f) {
-            const GridUpdateResult r = updateGridVelocities(fields_[f], colliders_, g, dt, tEnd, surfaceContact(f), false, owned(f));
+            const GridUpdateResult r =
+                updateGridVelocities(fields_[f], colliders_, g, dt, tEnd, surfaceContact(f), false, owned(f));
             out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
             out.work += r.work;
         }
@@ -662,12 +676,16 @@ void Simulation::scatter(float dt) {
                 clock.lap(phases_.communication);
                 return in;
             };
-            withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) { particlesToGrid(grid, species, settings_.transfer, dt, &remote); });
+            withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
+                particlesToGrid(grid, species, settings_.transfer, dt, &remote);
+            });
         }
         return;
     }
     for (std::size_t f = 0; f < fields_.size(); ++f)
-        withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) { particlesToGrid(grid, species, settings_.transfer, dt); });
+        withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
+            particlesToGrid(grid, species, settings_.transfer, dt);
+        });
 }
 
 G2PSummary Simulation::gather(float dt) {
@@ -808,8 +826,8 @@ void Simulation::runFrameSubsteps() {
             const StepBound b = stepBound();
             std::ostringstream msg;
             msg << "frame " << state_.frame + 1 << " would need about " << double(state_.frameSubsteps) + pieces
-                << " substeps (dt = " << dtMax << " s, set by " << b.cause << "); the limit is simulation.max_substeps_per_frame = "
-                << settings_.maxSubstepsPerFrame;
+                << " substeps (dt = " << dtMax << " s, set by " << b.cause
+                << "); the limit is simulation.max_substeps_per_frame = " << settings_.maxSubstepsPerFrame;
             throw LimitExceeded(msg.str());
         }
         const double dt = remaining / pieces;
@@ -871,7 +889,8 @@ FrameStats Simulation::measure() const {
             // A leaf counts once, on its owner (the others hold it as a ghost).
             if (partitioned_) {
                 leaves = 0;
-                for (const RankLeaves& f : rankLeaves_) leaves += std::size_t(std::count(f.owned.begin(), f.owned.end(), uint8_t(1)));
+                for (const RankLeaves& f : rankLeaves_)
+                    leaves += std::size_t(std::count(f.owned.begin(), f.owned.end(), uint8_t(1)));
             }
             leaves = std::size_t(comm_->sum((long long)leaves));
         }
@@ -883,7 +902,6 @@ FrameStats Simulation::measure() const {
         return st;
     });
 }
-
 
 // ---- Ranks (docs/distributed.md) ----
 
@@ -910,7 +928,8 @@ void pack(const S& sp, const std::vector<uint32_t>& which, Bytes& b) {
         using T = typename std::decay_t<decltype(arr)>::value_type;
         const std::size_t at = b.size();
         b.resize(at + which.size() * sizeof(T));
-        for (std::size_t k = 0; k < which.size(); ++k) std::memcpy(b.data() + at + k * sizeof(T), static_cast<const void*>(&arr[which[k]]), sizeof(T));
+        for (std::size_t k = 0; k < which.size(); ++k)
+            std::memcpy(b.data() + at + k * sizeof(T), static_cast<const void*>(&arr[which[k]]), sizeof(T));
     });
 }
 /// The particles [begin, end) of a species.
@@ -940,8 +959,10 @@ std::vector<std::pair<Vec3i, long long>> mergeCounts(std::vector<std::pair<Vec3i
     std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return mortonLess(a.first, b.first); });
     std::vector<std::pair<Vec3i, long long>> merged;
     for (const auto& e : all) {
-        if (!merged.empty() && merged.back().first == e.first) merged.back().second += e.second;
-        else merged.push_back(e);
+        if (!merged.empty() && merged.back().first == e.first)
+            merged.back().second += e.second;
+        else
+            merged.push_back(e);
     }
     return merged;
 }
@@ -1196,7 +1217,8 @@ void Simulation::sendGhostVelocities(SparseGrid& grid, const RankLeaves& leaves)
     }
 }
 
-void Simulation::fetchNodes(const SparseGrid& grid, const std::vector<Vec3i>& nodes, std::vector<float>& mass, std::vector<Vec3f>& velocity) {
+void Simulation::fetchNodes(const SparseGrid& grid, const std::vector<Vec3i>& nodes, std::vector<float>& mass,
+                            std::vector<Vec3f>& velocity) {
     // Requests to each node's owner, answered in the order asked (mass 0 where the owner has no leaf: no
     // particle reaches there on any rank).
     const int R = comm_->size(), me = comm_->rank();
@@ -1238,7 +1260,8 @@ void Simulation::fetchNodes(const SparseGrid& grid, const std::vector<Vec3i>& no
 }
 
 void Simulation::reduceSummary(G2PSummary& g2p) const {
-    if (g2p.badParticle >= 0) g2p.badId = particlesOf(state_.species[std::size_t(g2p.badSpecies)]).id[std::size_t(g2p.badParticle)];
+    if (g2p.badParticle >= 0)
+        g2p.badId = particlesOf(state_.species[std::size_t(g2p.badSpecies)]).id[std::size_t(g2p.badParticle)];
     if (!comm_->distributed()) return;
     g2p.maxSpeed = comm_->max(g2p.maxSpeed);
     comm_->min(g2p.minStiffnessKey);
@@ -1285,7 +1308,8 @@ std::vector<AnySpecies> Simulation::gatherSpecies() const {
                     }
                     std::vector<uint32_t> order(late.p.size());
                     for (std::size_t i = 0; i < order.size(); ++i) order[i] = uint32_t(i);
-                    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t c) { return late.p.id[a] < late.p.id[c]; });
+                    std::stable_sort(order.begin(), order.end(),
+                                     [&](uint32_t a, uint32_t c) { return late.p.id[a] < late.p.id[c]; });
                     late.forEachArray([&](auto& arr) {
                         std::decay_t<decltype(arr)> sorted;
                         sorted.reserve(arr.size());

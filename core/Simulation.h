@@ -39,10 +39,10 @@ struct SimulationSettings {
     Vec3d gravity = Vec3d(0.0, -9.81, 0.0);  ///< Y is up, as in Houdini [m/s^2]
     TransferSettings transfer;
     double fps = 24.0;
-    int substepsPerFrame = 20;     ///< target dt = 1 / (fps * substepsPerFrame)
-    bool adaptive = true;          ///< also bound dt by the CFL condition
-    double cfl = 0.5;              ///< C in dt <= C dx / (c + |v|max)
-    double maxDisplacement = 0.0;  ///< thesis rule: max node displacement per substep in cells; 0 = off
+    int substepsPerFrame = 20;              ///< target dt = 1 / (fps * substepsPerFrame)
+    bool adaptive = true;                   ///< also bound dt by the CFL condition
+    double cfl = 0.5;                       ///< C in dt <= C dx / (c + |v|max)
+    double maxDisplacement = 0.0;           ///< thesis rule: max node displacement per substep in cells; 0 = off
     long long maxSubstepsPerFrame = 20000;  ///< watchdog: a frame that would need more stops the run
     StabilitySettings stability;
     ContactModel contact = ContactModel::SingleField;
@@ -69,7 +69,7 @@ struct Emitter {
     /// as v = w x (x - pivot), whose gradient is [w]x: without it C starts at zero and the first transfer loses the
     /// spin's share that C carries (a sphere spun at 10 rad/s turned at 9.53).
     Mat3f affine = Mat3f::Zero();
-    float mass = 0.0f, volume = 0.0f;  ///< per particle
+    float mass = 0.0f, volume = 0.0f;    ///< per particle
     std::vector<float> masses, volumes;  ///< particle by particle (a point cloud's), instead of mass, volume; empty: none
     int startFrame = 0;
     int durationFrames = 1;  ///< emissions happen in [startFrame, startFrame + durationFrames)
@@ -85,7 +85,8 @@ struct Emitter {
     Stream stream;
 
     bool emitsAt(int frame) const {
-        return !continuous && frame >= startFrame && frame < startFrame + durationFrames && (frame - startFrame) % (pauseFrames + 1) == 0;
+        return !continuous && frame >= startFrame && frame < startFrame + durationFrames &&
+               (frame - startFrame) % (pauseFrames + 1) == 0;
     }
     /// The last frame it emits at (startFrame - 1 when it never does, a stream included).
     int lastEmission() const {
@@ -103,12 +104,12 @@ struct Emitter {
 /// Wall seconds spent in each phase of the substeps since the last reset (bench/ reports their shares).
 /// The deformation update and return mapping run fused inside G2P, so their cost is part of g2p.
 struct PhaseSeconds {
-    double topology = 0.0;  ///< leaf set, release and neighbour tables
-    double binning = 0.0;   ///< counting sort by leaf and the permutation of particle arrays
-    double p2g = 0.0;       ///< grid clear and particle-to-grid scatter, stress included
-    double grid = 0.0;      ///< grid velocity update, gravity and colliders
-    double g2p = 0.0;       ///< grid-to-particle gather, deformation update, advection
-    double other = 0.0;     ///< time step, stability checks
+    double topology = 0.0;       ///< leaf set, release and neighbour tables
+    double binning = 0.0;        ///< counting sort by leaf and the permutation of particle arrays
+    double p2g = 0.0;            ///< grid clear and particle-to-grid scatter, stress included
+    double grid = 0.0;           ///< grid velocity update, gravity and colliders
+    double g2p = 0.0;            ///< grid-to-particle gather, deformation update, advection
+    double other = 0.0;          ///< time step, stability checks
     double communication = 0.0;  ///< ranks: particles moving between ranks, halos, ghost velocities, global sums
     double total() const { return topology + binning + p2g + grid + g2p + other + communication; }
 };
@@ -211,7 +212,8 @@ public:
     std::size_t ghostLeafCount() const {
         std::size_t n = 0;
         if (partitioned_)
-            for (const RankLeaves& f : rankLeaves_) n += f.owned.size() - std::size_t(std::count(f.owned.begin(), f.owned.end(), uint8_t(1)));
+            for (const RankLeaves& f : rankLeaves_)
+                n += f.owned.size() - std::size_t(std::count(f.owned.begin(), f.owned.end(), uint8_t(1)));
         return n;
     }
     /// The rank owning a leaf (by leaf coordinate).
@@ -225,9 +227,9 @@ public:
 private:
     /// One velocity field's leaves on ranks: whose they are, and the ghost leaves each side of every rank pair.
     struct RankLeaves {
-        std::vector<uint8_t> owned;                     ///< per leaf of the field: owned by this rank
-        std::vector<std::vector<uint32_t>> ghostsFrom;  ///< per rank: this rank's ghost leaves that rank owns
-        std::vector<std::vector<uint32_t>> ghostsFor;   ///< per rank: owned leaves that rank holds as ghosts
+        std::vector<uint8_t> owned;                      ///< per leaf of the field: owned by this rank
+        std::vector<std::vector<uint32_t>> ghostsFrom;   ///< per rank: this rank's ghost leaves that rank owns
+        std::vector<std::vector<uint32_t>> ghostsFor;    ///< per rank: owned leaves that rank holds as ghosts
         std::vector<std::vector<Vec3i>> ghostCoordsFor;  ///< the same by leaf coordinate, as that rank sent them
         std::vector<std::vector<NodeBox>> ghostBoxFor;   ///< per rank and ghost leaf: the nodes that rank's halo parts wrote
     };
@@ -250,7 +252,8 @@ private:
     void exchangeReachedLeaves(SparseGrid& grid, RankLeaves& leaves);
     void sendGhostVelocities(SparseGrid& grid, const RankLeaves& leaves);
     /// The mass and velocity of nodes other ranks own, from their owners (the mirror pass). Collective.
-    void fetchNodes(const SparseGrid& grid, const std::vector<Vec3i>& nodes, std::vector<float>& mass, std::vector<Vec3f>& velocity);
+    void fetchNodes(const SparseGrid& grid, const std::vector<Vec3i>& nodes, std::vector<float>& mass,
+                    std::vector<Vec3f>& velocity);
     /// Globalises a G2P summary: extremes over ranks, and the bad particle one process would report first.
     void reduceSummary(G2PSummary& g2p) const;
     StepBound lastBound_{0.0, "", ""};  ///< what set the latest substep's step (stats only, not state)
@@ -270,8 +273,8 @@ private:
     /// Gives the particles of emitter e appended from index `from` of its species its affine velocity.
     void setAffine(const Emitter& e, std::size_t from);
     void appendParticles(int species, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
-                         const std::vector<Vec3f>& perParticle, const std::vector<float>& masses, const std::vector<float>& volumes,
-                         const std::vector<int32_t>& ids);
+                         const std::vector<Vec3f>& perParticle, const std::vector<float>& masses,
+                         const std::vector<float>& volumes, const std::vector<int32_t>& ids);
     /// Calls fn(grid, species) for field f with the species that scatter into it, in species order (with one
     /// field, all of them in place; otherwise they are moved into a scratch list and back, pointers only).
     template <class Fn>
@@ -284,12 +287,12 @@ private:
     // The state.
     SimState state_;
     // Step caches, rebuilt from the state every substep.
-    std::vector<SparseGrid> fields_;                 ///< velocity fields: one, or one per body
-    std::vector<std::vector<int>> fieldSpecies_;     ///< per field, its species
-    std::vector<AnySpecies> fieldScratch_;           ///< a field's species while its transfers run
-    double restDensity_ = 0.0;                       ///< of all particles, for SurfaceContact
-    bool densitiesDiffer_ = false;                   ///< whether the species' rest densities differ
-    std::vector<std::vector<float>> leafCellMass_;   ///< per field and leaf, where they differ: rest density times dx^3
+    std::vector<SparseGrid> fields_;                ///< velocity fields: one, or one per body
+    std::vector<std::vector<int>> fieldSpecies_;    ///< per field, its species
+    std::vector<AnySpecies> fieldScratch_;          ///< a field's species while its transfers run
+    double restDensity_ = 0.0;                      ///< of all particles, for SurfaceContact
+    bool densitiesDiffer_ = false;                  ///< whether the species' rest densities differ
+    std::vector<std::vector<float>> leafCellMass_;  ///< per field and leaf, where they differ: rest density times dx^3
     /// Per species: whether it has particles anywhere (on any rank); particles are never removed, so this is
     /// set by emission and restore alone, on every rank alike.
     std::vector<uint8_t> populated_;
@@ -303,11 +306,11 @@ private:
     const Comm* comm_;
     std::vector<Vec3i> splitters_;  ///< leaf coordinate where rank r + 1's range starts (Morton order)
     bool partitioned_ = false;
-    bool holdsShare_ = false;  ///< restored from checkpoint parts: distribute() merges every rank's counts
+    bool holdsShare_ = false;             ///< restored from checkpoint parts: distribute() merges every rank's counts
     std::vector<RankLeaves> rankLeaves_;  ///< per field
-    std::vector<int> ownerScratch_;  ///< migration: the owner of each particle's leaf
+    std::vector<int> ownerScratch_;       ///< migration: the owner of each particle's leaf
     int rebalances_ = 0;
-    double cutImbalance_ = 0.0;  ///< how far above the mean the last cut left the most loaded rank
+    double cutImbalance_ = 0.0;        ///< how far above the mean the last cut left the most loaded rank
     int32_t restDensityVersion_ = -1;  ///< nextId when the rest density was measured (the same on every rank)
 };
 

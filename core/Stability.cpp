@@ -93,7 +93,8 @@ Culprit stiffestParticle(const SimState& state, const Comm& comm) {
 void failAt(const SimState& state, const std::string& cause, int s, int32_t id, double dt) {
     std::ostringstream msg;
     // Frames counted as their files are, from 1: the one under way. The energy check spans substeps (dt 0): no step to name.
-    msg << cause << " in frame " << state.frame + 1 << " (substep " << state.substeps << " of the run, t = " << state.time << " s";
+    msg << cause << " in frame " << state.frame + 1 << " (substep " << state.substeps << " of the run, t = " << state.time
+        << " s";
     if (dt > 0.0) msg << ", dt = " << dt << " s";
     msg << "): particle id " << id << " of set " << std::visit([](const auto& sp) { return sp.name; }, state.species[s]);
     throw SimulationError(msg.str());

@@ -53,8 +53,10 @@ DirectoryLock::DirectoryLock(const std::string& directory) : path_(directory + "
                                 "); wait for it to finish, or give another directory with -o");
             throw LockError(directory + ": cannot lock " + path_ + ": " + std::strerror(e));
         }
-        struct stat held {}, named {};
-        if (::fstat(fd_, &held) == 0 && ::stat(path_.c_str(), &named) == 0 && held.st_ino == named.st_ino && held.st_dev == named.st_dev)
+        struct stat held {
+        }, named{};
+        if (::fstat(fd_, &held) == 0 && ::stat(path_.c_str(), &named) == 0 && held.st_ino == named.st_ino &&
+            held.st_dev == named.st_dev)
             break;
         ::close(fd_);
         fd_ = -1;

@@ -103,9 +103,9 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
     const MeshField f = meshField(scene, where, m, place, solidOutside);
     if (notes) {
         // The centre of the mesh's own box: exact, where the field's box is rounded to voxels and wider by its band.
-        Vec3d lo = Vec3d::Constant(INFINITY), hi = Vec3d::Constant(-INFINITY);
-        for (const Vec3d& p : f.mesh.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-        notes->centre = 0.5 * (lo + hi);
+        Eigen::AlignedBox3d box;
+        for (const Vec3d& p : f.mesh.points) box.extend(p);
+        notes->centre = box.center();
         notes->voxel = f.voxel;
         if (place && !resolves(f.voxel, f.wall.thinnest)) notes->warning = thinWallWarning(scene, where, m, f);
     }

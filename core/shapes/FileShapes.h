@@ -18,20 +18,29 @@ struct MeshShape {
 
     template <class V>
     static void keys(V& v, MeshShape& s) {
-        v.text(Key{.name = "file", .help = "triangle mesh (OBJ, PLY, STL, glTF, FBX, ...), relative to the scene file", .required = true},
+        v.text(Key{.name = "file",
+                   .help = "triangle mesh (OBJ, PLY, STL, glTF, FBX, ...), relative to the scene file",
+                   .required = true},
                s.file);
-        v.number(Key{.name = "voxel_size",
-                     .help = "voxel of its distance field; 0: for a collider dx / 2, or finer (to dx / 8) so that its thinnest wall "
-                             "is two voxels thick (`mpm validate` warns of walls thinner than the field resolves), stated in the resolved scene; "
-                             "for a set dx / 2",
-                     .lo = 0.0, .hi = kHuge, .unit = "m"},
-                 s.voxelSize);
+        v.number(
+            Key{.name = "voxel_size",
+                .help = "voxel of its distance field; 0: for a collider dx / 2, or finer (to dx / 8) so that its thinnest wall "
+                        "is two voxels thick (`mpm validate` warns of walls thinner than the field resolves), stated in the "
+                        "resolved scene; "
+                        "for a set dx / 2",
+                .lo = 0.0,
+                .hi = kHuge,
+                .unit = "m"},
+            s.voxelSize);
         v.number(Key{.name = "thickness",
                      .help = "0: a closed mesh, solid inside; > 0: a shell of this half-thickness around the surface (needed for "
                              "an open mesh such as a terrain or a sheet)",
-                     .lo = 0.0, .hi = kHuge, .unit = "m"},
+                     .lo = 0.0,
+                     .hi = kHuge,
+                     .unit = "m"},
                  s.thickness);
-        v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"}, [&](auto& t) { Placement::keys(t, s.transform); });
+        v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"},
+                 [&](auto& t) { Placement::keys(t, s.transform); });
         v.check(!s.file.empty(), "file", "must name a mesh file");
     }
 };
@@ -54,7 +63,8 @@ struct VdbShape {
         v.text(Key{.name = "velocity_grid",
                    .help = "a sequence's velocity grid (Houdini's `vel`); empty: the velocity the level sets' change implies"},
                s.velocityGrid);
-        v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"}, [&](auto& t) { Placement::keys(t, s.transform); });
+        v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"},
+                 [&](auto& t) { Placement::keys(t, s.transform); });
         v.check(!s.file.empty(), "file", "must name a VDB file");
     }
 };
@@ -68,12 +78,15 @@ struct PointsShape {
 
     template <class V>
     static void keys(V& v, PointsShape& s) {
-        v.text(Key{.name = "file",
-                   .help = "PLY point cloud (ASCII or binary), relative to the scene file: x, y, z; when present vx, vy, vz (or v.x, "
-                           "...), pscale (the point's volume is (2 pscale)^3), mass or density (per point, instead of the material's)",
-                   .required = true},
-               s.file);
-        v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"}, [&](auto& t) { Placement::keys(t, s.transform); });
+        v.text(
+            Key{.name = "file",
+                .help =
+                    "PLY point cloud (ASCII or binary), relative to the scene file: x, y, z; when present vx, vy, vz (or v.x, "
+                    "...), pscale (the point's volume is (2 pscale)^3), mass or density (per point, instead of the material's)",
+                .required = true},
+            s.file);
+        v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"},
+                 [&](auto& t) { Placement::keys(t, s.transform); });
         v.check(!s.file.empty(), "file", "must name a PLY file");
     }
 };
