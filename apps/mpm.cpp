@@ -319,7 +319,10 @@ int cli(int argc, char** argv) {
     } catch (const WriteError& e) {
         return fail(kExitRunFailed, "\nerror: cannot write %s (earlier files are intact)\n", e.what());
     } catch (const std::bad_alloc&) {
-        return fail(kExitRunFailed, "\nerror: %s\n", "out of memory", false);
+        // The run's phases say what they were doing (SceneRun::guarded); this is reading the scene or its files.
+        return fail(kExitRunFailed,
+                    "\nerror: out of memory while reading %s and the files it names, before any particle was made\n",
+                    scenePath.c_str(), false);
     } catch (const std::exception& e) {
         return fail(kExitRunFailed, "\nerror: %s\n", e.what(), false);
     }

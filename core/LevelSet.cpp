@@ -9,13 +9,20 @@
 
 namespace mpm {
 
-/// One voxel per 8^3 voxels of the level set, on where the band is, grown by the reach.
+/// One voxel per 8^3 voxels of the level set, on where the band is, grown by the reach; or, for a reach of more
+/// than kMaxMaskGrowth coarse cells, the band's box grown by the reach.
 struct LevelSet::Near {
     openvdb::MaskGrid::Ptr mask;
+    bool boxOnly = false;
+    Vec3d lo = Vec3d::Zero(), hi = Vec3d::Zero();
 };
 
 namespace {
 constexpr int kCoarseLog2 = 3;  ///< coarse cells of 8 voxels: the level set's own leaf nodes
+/// Beyond this many coarse cells of reach the mask's dilation costs more than it saves (its voxels grow as the
+/// cube of it: a scene of dx 1e6 m around a file of 1 cm voxels asked for 1e8 and stalled), and the band's box,
+/// grown by the reach, tells near from far instead. Scenes reach 4 coarse cells at the default voxel of dx/2, 13 at dx/8.
+constexpr int kMaxMaskGrowth = 64;
 
 /// Trilinear interpolation of the corners v[4 i + 2 j + k] of a voxel at the fraction f within it.
 double trilinear(const double v[8], const Vec3d& f) {
@@ -52,9 +59,14 @@ LevelSet::LevelSet(std::shared_ptr<const Grid> grid, double reach) : grid_(std::
                     for (int z = box.min().z() >> kCoarseLog2; z <= box.max().z() >> kCoarseLog2; ++z)
                         acc.setValueOn(openvdb::Coord(x, y, z));
         }
-    const int grow = int(std::ceil(reach / cell)) + 1;
-    openvdb::tools::dilateActiveValues(near->mask->tree(), grow, openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                       openvdb::tools::IGNORE_TILES);
+    const double grow = std::ceil(reach / cell) + 1.0;
+    if (grow > kMaxMaskGrowth) {
+        near->boxOnly = true;
+        near->lo = lo_ - Vec3d::Constant(reach + cell), near->hi = hi_ + Vec3d::Constant(reach + cell);
+    } else {
+        openvdb::tools::dilateActiveValues(near->mask->tree(), int(grow), openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                           openvdb::tools::IGNORE_TILES);
+    }
     near_ = near;
 }
 
@@ -81,14 +93,16 @@ struct LevelSet::Sampler::Impl {
     const openvdb::FloatGrid& grid;
     openvdb::FloatGrid::ConstAccessor acc;
     double invVoxel;
+    const Near& near;
     openvdb::MaskGrid::ConstAccessor nearAcc;
     const openvdb::math::Transform& xform;
     double invCoarse;
-    Impl(const openvdb::FloatGrid& g, const openvdb::MaskGrid& near)
+    Impl(const openvdb::FloatGrid& g, const Near& n)
         : grid(g),
           acc(g.getConstAccessor()),
           invVoxel(1.0 / g.voxelSize()[0]),
-          nearAcc(near.getConstAccessor()),
+          near(n),
+          nearAcc(n.mask->getConstAccessor()),
           xform(g.transform()),
           invCoarse(1.0 / double(1 << kCoarseLog2)) {}
 
@@ -101,9 +115,10 @@ struct LevelSet::Sampler::Impl {
     }
 };
 
-LevelSet::Sampler::Sampler(const LevelSet& ls) : impl_(std::make_unique<Impl>(*ls.grid_->grid, *ls.near_->mask)) {}
+LevelSet::Sampler::Sampler(const LevelSet& ls) : impl_(std::make_unique<Impl>(*ls.grid_->grid, *ls.near_)) {}
 
 bool LevelSet::Sampler::far(const Vec3d& x) {
+    if (impl_->near.boxOnly) return (x.array() < impl_->near.lo.array()).any() || (x.array() > impl_->near.hi.array()).any();
     // The coarse cell of x's voxel (the mask is in coarse cells of the level set's index space).
     const openvdb::Vec3d i = impl_->xform.worldToIndex(openvdb::Vec3d(x[0], x[1], x[2])) * impl_->invCoarse;
     return !impl_->nearAcc.isValueOn(openvdb::Coord(int(std::floor(i[0])), int(std::floor(i[1])), int(std::floor(i[2]))));

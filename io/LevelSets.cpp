@@ -66,6 +66,22 @@ TriangleMesh readMesh(const std::string& path) {
     return mesh;
 }
 
+double TriangleMesh::area() const {
+    double sum = 0.0;
+    for (const Eigen::Vector3i& t : triangles)
+        sum += 0.5 * (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]).norm();
+    return sum;
+}
+
+double meshFieldBytes(const TriangleMesh& mesh, double voxelSize, double bandWidth) {
+    // A leaf is 8 voxels on a side; a band crosses about band / leaf + 1 of them, and each straddles the surface.
+    constexpr double kLeafVoxels = 8.0, kLeavesAcrossExtra = 2.0;
+    constexpr double kBytesPerVoxel = sizeof(float) + sizeof(int32_t);
+    const double leaf = kLeafVoxels * voxelSize;
+    const double leaves = mesh.area() / (leaf * leaf) * (bandWidth / leaf + kLeavesAcrossExtra);
+    return leaves * kLeafVoxels * kLeafVoxels * kLeafVoxels * kBytesPerVoxel;
+}
+
 std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std::string& path, double voxelSize, double thickness,
                                              double exteriorBand, double interiorBand, double reach) {
     const std::size_t open = mesh.openEdges();
@@ -164,7 +180,11 @@ std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::
     if (double(grid->background()) < band * (1.0 - kFloatRounding)) {
         // Extend the band by solving |grad phi| = 1 outward from it (fast sweeping), which keeps the values the file
         // has; a rebuild through a mesh would move them and break the field's symmetries.
-        const int grow = int(std::ceil((band - double(grid->background())) / vs[0]));
+        // No deeper than the object is wide: inside, no point lies deeper; outside, a band wider than the object is
+        // all background's business (a scene of dx 1e6 m asked for 3e8 voxels here, and OpenVDB stalled making them).
+        const openvdb::CoordBBox extent = grid->evalActiveVoxelBoundingBox();
+        const double widest = double(extent.dim().asVec3d().length());
+        const int grow = int(std::min(std::ceil((band - double(grid->background())) / vs[0]), std::max(widest, 1.0)));
         grid = openvdb::tools::dilateSdf(*grid, grow, openvdb::tools::NN_FACE_EDGE_VERTEX);
         grid->setGridClass(openvdb::GRID_LEVEL_SET);
     }

@@ -24,10 +24,18 @@ struct TriangleMesh {
     std::vector<Eigen::Vector3i> triangles;
     /// Edges used by exactly one triangle (0 for a closed mesh).
     std::size_t openEdges() const;
+    /// The surface's area [m^2 in the points' units].
+    double area() const;
 };
 
 /// Reads every mesh of a file into one, welding corners at equal positions.
 TriangleMesh readMesh(const std::string& path);
+
+/// About how many bytes OpenVDB's mesh-to-volume conversion holds for `mesh`'s distance field at `voxelSize`,
+/// with a band `bandWidth` [m] wide in all: the leaves of 8^3 voxels along the surface, each voxel with its
+/// distance and the conversion's closest-triangle index. Known before building, so a mesh scaled or placed by
+/// mistake is refused with the estimate instead of exhausting memory.
+double meshFieldBytes(const TriangleMesh& mesh, double voxelSize, double bandWidth);
 
 /// A closed mesh as a solid (thickness 0), or any mesh as a shell of half-thickness `thickness` around its
 /// surface. The band reaches `exteriorBand` outside the surface and `interiorBand` inside [m]; `reach` is the

@@ -117,12 +117,17 @@ void onRoot(const Comm& comm, F&& fn) {
 SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents events)
     : scene_(loadScene(scenePath)), options_(std::move(options)), events_(std::move(events)) {
     // Budgets before work: a scene that cannot run here fails now, with the estimate and what to change.
-    checkBudget(scene_, estimateBudget(scene_, false, Comm::world().size()));
+    const SceneBudget budget = estimateBudget(scene_, false, Comm::world().size());
+    checkBudget(scene_, budget);
+    neededBytes_ = budget.memoryBytes, machineBytes_ = budget.machineBytes;
     last_ = options_.lastFrame < 0 ? scene_.frames : options_.lastFrame;
+    // Files are counted from 1; 0 names the initial state, whose file output.initial_frame writes.
     if (options_.framesGiven && (last_ > scene_.frames || options_.firstFrame > scene_.frames))
-        throw SceneError(scene_.file + ": --frames " + std::to_string(options_.firstFrame) + ":" + std::to_string(last_) + ": the scene has " +
-                         std::to_string(scene_.frames) + " frames (simulation.frames); ask for frames within 1:" + std::to_string(scene_.frames) +
-                         ", or raise simulation.frames");
+        throw SceneError(
+            scene_.file + ": --frames " + std::to_string(options_.firstFrame) + ":" + std::to_string(last_) + ": the scene has " +
+            std::to_string(scene_.frames) +
+            " frames (simulation.frames); ask for frames within 1:" + std::to_string(scene_.frames) +
+            " (or from 0, the initial state, written when output.initial_frame is true), or raise simulation.frames");
     dir_ = options_.outDir.empty() ? scene_.output.directory : options_.outDir;
     // On several ranks (mpirun) rank 0 alone owns the directory: it takes the lock and writes every file.
     const Comm& comm = Comm::world();
@@ -149,7 +154,9 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     layout_ = speciesLayout(scene_);
     identity_ = sceneIdentity(scene_.resolvedJson);
     hash_ = sceneHash(identity_);
-    chooseStart();
+    guarded(options_.resume || options_.framesGiven ? "reading a checkpoint or emitting the sets due at the start"
+                                                    : "emitting the sets due at the start",
+            [&] { chooseStart(); });
     onRoot(comm, [&] {
         // Part of a scene (--frames A:B): the rows of the other frames stay as the earlier runs wrote them.
         std::map<int, std::string> kept;
@@ -161,7 +168,9 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     if (comm.distributed() && scene_.output.rankFiles == "per_rank")
         partWriter_ = std::make_unique<FrameWriter>(FrameWriter::partWriter(scene_, layout_, dir_, comm.rank()));
     // The initial state's row (and file 0, if asked for), once: a run restored inside frame 1 has it in its stats.
-    if (start_ == 0 && !restored_) writeFrame(0, sim_->measure(), options_.firstFrame == 0 && scene_.output.initialFrame);
+    if (start_ == 0 && !restored_)
+        guarded("writing frame 0",
+                [&] { writeFrame(0, sim_->measure(), options_.firstFrame == 0 && scene_.output.initialFrame); });
 }
 
 void SceneRun::writeFrame(int frame, const FrameStats& st, bool write) {
@@ -197,11 +206,12 @@ void SceneRun::guarded(const std::string& what, F&& f) {
                          what.c_str(), sim_ ? sim_->particleCount() : std::size_t(0));
             comm.abort(1);
         }
-        const SceneBudget b = estimateBudget(scene_, false, Comm::world().size());
         std::ostringstream msg;
         msg.precision(3);
-        msg << "out of memory while " << what << " with " << (sim_ ? sim_->particleCount() : 0) << " particles (the scene needs about "
-            << b.memoryBytes / double(1u << 30) << " GiB at its peak; this machine has " << b.machineBytes / double(1u << 30) << " GiB)";
+        msg << "out of memory while " << what << " with " << (sim_ ? sim_->particleCount() : 0)
+            << " particles (the scene needs about " << neededBytes_ / double(1u << 30)
+            << " GiB at its peak by validate's estimate; this machine has " << machineBytes_ / double(1u << 30)
+            << " GiB, less what other programs and the process's limits (ulimit -v) leave)";
         throw LimitExceeded(msg.str());
     }
 }

@@ -84,6 +84,9 @@ private:
     void reportRanks();
 
     SceneDesc scene_;
+    /// What the scene was estimated to need (for the message when an allocation fails: made before, as then
+    /// there may be no memory to estimate it).
+    double neededBytes_ = 0.0, machineBytes_ = 0.0;
     RunOptions options_;
     RunEvents events_;
     std::string dir_;

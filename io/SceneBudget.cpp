@@ -89,6 +89,8 @@ std::string duration(double seconds) {
 
 }  // namespace
 
+double machineMemoryBytes() { return double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE)); }
+
 SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks) {
     SceneBudget b;
     const SimulationSettings& st = scene.settings;
@@ -142,7 +144,7 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         }
         b.sets.push_back(s);
     }
-    b.machineBytes = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE));
+    b.machineBytes = machineMemoryBytes();
     if (b.memoryBytes > b.machineBytes)
         b.problems.push_back("/sets: " + std::string(ranks > 1 ? "rank 0 of " + std::to_string(ranks) + " (its share" + std::string(scene.output.rankFiles == "gathered" ? ", and every particle gathered to write a frame or checkpoint)" : ")") : "the run") +
                              " needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) +

@@ -33,6 +33,9 @@ struct SceneBudget {
     std::vector<std::string> problems;  ///< each "/json/path: what is wrong; what to change"
 };
 
+/// Physical memory of this machine [bytes].
+double machineMemoryBytes();
+
 /// Estimates the scene's cost. With countExactly, sets of up to a few million particles are sampled to count
 /// them exactly (validate does; a run, which samples them anyway, does not). On `ranks` processes the memory
 /// is rank 0's: its share of the particles and, while it writes a frame or a checkpoint, all of them gathered.

@@ -24,12 +24,15 @@ struct Result {
     std::string output;
 };
 
-Result runMpm(const std::string& args) {
+/// A shell command line's exit code and output; its last command's output is the one kept.
+Result runShell(const std::string& command) {
     const std::string log = (fs::temp_directory_path() / ("mpm_cli_" + std::to_string(::getpid()) + ".log")).string();
-    const int status = std::system((std::string(MPM_BINARY) + " " + args + " > " + log + " 2>&1").c_str());
+    const int status = std::system((command + " > " + log + " 2>&1").c_str());
     std::ifstream in(log);
     return {WEXITSTATUS(status), std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>())};
 }
+
+Result runMpm(const std::string& args) { return runShell(std::string(MPM_BINARY) + " " + args); }
 
 std::string sceneFile(const std::string& name, const std::string& text) {
     const fs::path dir = fs::temp_directory_path() / ("mpm_cli_" + std::to_string(::getpid()));
@@ -217,6 +220,108 @@ TEST(Cli, ValidateGivesTheRunTimeAndWarnsOfAScaleMistakeWithinSeconds) {
     EXPECT_NE(r.output.find("big.json: /sets: the run would take about "), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("(33510321 particles, 59 substeps a frame, 4800 frames)"), std::string::npos) << r.output;
     EXPECT_EQ(runMpm("validate --strict " + big).code, 2);
+}
+
+TEST(Cli, AMeshScaledByMistakeIsRefusedBeforeItsFieldIsBuilt) {
+    // A 0.1 m tetrahedron scaled by 1e6: its distance field at a voxel of dx/2 would need about 2e8 GiB
+    // (area 2.4e10 m^2); OpenVDB's conversion ran out of memory and aborted (rc 134). A vertex at 1e300 lies
+    // beyond any grid. Both are refused with the file and what to check, in well under the seconds a field takes.
+    sceneFile("tet.obj", "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    sceneFile("far.obj", "v 0 0 0\nv 1e300 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    const auto scene = [](const std::string& mesh, double scale) {
+        return R"({"simulation": {"frames": 2}, "sets": [{"material": "water", "shape": {"type": "box", "min": [0.3, 0.3, 0.3],
+            "max": [0.4, 0.4, 0.4]}}], "colliders": [{"type": "mesh", "file": ")" +
+               mesh + R"(", "transform": {"scale": )" + std::to_string(scale) + "}}]}";
+    };
+    const std::string scaled = sceneFile("scaled.json", scene("tet.obj", 1e6)),
+                      far = sceneFile("far.json", scene("far.obj", 1.0));
+    for (const std::string& command : {"validate " + scaled, "run " + scaled + " -o " + scaled + ".out"}) {
+        const Result r = runMpm(command);
+        EXPECT_EQ(r.code, 2) << r.output;
+        EXPECT_NE(r.output.find("scaled.json: /colliders/0/file: tet.obj: its distance field would take about"),
+                  std::string::npos)
+            << r.output;
+        EXPECT_NE(r.output.find("transform.scale (1e+06)"), std::string::npos) << r.output;
+    }
+    const Result r = runMpm("validate " + far);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("far.json: /colliders/0/file: far.obj: a vertex lies at"), std::string::npos) << r.output;
+}
+
+TEST(Cli, AVdbColliderInASceneOfHugeCellsValidatesInSeconds) {
+    // dx = 1e6 m around a rock of 1 cm voxels: the collider's reach is 1e7 m, 1e8 of the field's coarse cells, and
+    // growing its near-surface mask that far stalled validate for minutes. The mask stops at 64 coarse cells and
+    // the band's box answers beyond.
+    const std::string scene =
+        sceneFile("huge_cells.json", R"({"simulation": {"frames": 1, "dx": 1e6}, "sets": [{"material": "water",
+        "shape": {"type": "box", "min": [0, 0, 0], "max": [3e6, 3e6, 3e6]}}], "colliders": [{"type": "vdb", "file": ")" +
+                                         std::string(MPM_SOURCE_DIR) + R"(/scenes/assets/rock.vdb", "grid": "surface"}]})");
+    const auto start = std::chrono::steady_clock::now();
+    const Result r = runMpm("validate " + scene);
+    // 6 s in Release here (the field's own band growth and the run-time estimate); minutes before.
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 60.0);
+    EXPECT_EQ(r.code, 0) << r.output;
+}
+
+TEST(Cli, OverlappingSetsGetOneLineEachAndManyOfThemAnswerWithinSeconds) {
+    // 300 boxes of water in one place and one apart: every set in the pile overlaps the 299 others, and says so in
+    // one line naming three; the one apart says nothing. Tested pair by pair, this took 17 s and printed 14 MB.
+    nlohmann::json scene = {{"simulation", {{"frames", 1}, {"dx", 0.02}}}, {"sets", nlohmann::json::array()}};
+    const auto box = [](double x) {
+        return nlohmann::json{{"material", "water"},
+                              {"sampling", "lattice"},
+                              {"shape", {{"type", "box"}, {"min", {x, 0, 0}}, {"max", {x + 0.1, 0.1, 0.1}}}}};
+    };
+    constexpr int kPile = 300;
+    for (int i = 0; i < kPile; ++i) scene["sets"].push_back(box(0.0));
+    scene["sets"].push_back(box(1.0));
+    const std::string path = sceneFile("pile.json", scene.dump());
+    const auto start = std::chrono::steady_clock::now();
+    const Result r = runMpm("validate " + path);
+    // About 2 s in Release here (most of it the run-time estimate); the bound leaves room for the sanitizers.
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 60.0);
+    EXPECT_EQ(r.code, 0) << r.output.substr(0, 2000);
+    std::size_t lines = 0;
+    for (std::size_t at = r.output.find("emitted into the same space"); at != std::string::npos;
+         at = r.output.find("emitted into the same space", at + 1))
+        ++lines;
+    EXPECT_EQ(lines, std::size_t(kPile));
+    EXPECT_NE(
+        r.output.find(
+            "pile.json: /sets/0/shape: 1000 of 1000 particles lie inside set 1 (\"set1\"); 1000 of 1000 particles lie inside "
+            "set 2 (\"set2\"); 1000 of 1000 particles lie inside set 3 (\"set3\"); and inside 296 more sets: they are emitted"),
+        std::string::npos)
+        << r.output.substr(0, 2000);
+    EXPECT_EQ(r.output.find("/sets/300/shape"), std::string::npos);
+    EXPECT_LT(r.output.size(), std::size_t(kPile) * 400);
+    // Two sets: the line names the one.
+    scene["sets"] = {box(0.0), box(0.05)};
+    const Result two = runMpm("validate " + sceneFile("two.json", scene.dump()));
+    EXPECT_NE(
+        two.output.find(
+            "two.json: /sets/1/shape: 500 of 1000 particles lie inside set 0 (\"set0\"): both are emitted into the same space"),
+        std::string::npos)
+        << two.output;
+}
+
+TEST(Cli, RunningOutOfMemorySaysWhatWasBeingDone) {
+#if defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space: a limit on it (ulimit -v) stops it from starting";
+#else
+    // 16 million particles (about 3.65 GiB by the estimate) under a 600 MB address-space limit (the program and its
+    // libraries take about 260 MB of it here): the sampling runs out, and the message names the phase, the
+    // particles and the estimate, where it was a bare "out of memory" (exit 1).
+    const std::string big =
+        sceneFile("oom.json", R"({"simulation": {"frames": 2, "dx": 0.005}, "sets": [{"name": "pool", "material": "water",
+        "sampling": "lattice", "shape": {"type": "box", "min": [0, 0, 0], "max": [1, 0.5, 0.5]}}]})");
+    const std::string out = big + ".out";
+    const Result r = runShell("ulimit -v 600000; " + std::string(MPM_BINARY) + " run " + big + " -o " + out + " --threads 2");
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_NE(r.output.find("error: simulation stopped: out of memory while sampling the particle sets"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("(the scene needs about 3.65 GiB at its peak"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out + "/oom_0001.vdb"));
+#endif
 }
 
 TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
