@@ -37,7 +37,7 @@ void writePly(const std::string& path, const PointCloud& f) {
     const std::size_t n = f.size();
     const bool colour = f.Cd.size() == n && n > 0, pscale = f.pscale.size() == n && n > 0;
     const bool J = f.J.size() == n && n > 0, Jp = f.Jp.size() == n && n > 0, stress = f.stressNorm.size() == n && n > 0,
-               F = f.F.size() == n && n > 0;
+               F = f.F.size() == n && n > 0, plastic = f.plasticStrain.size() == n && n > 0;
     std::string header = "ply\nformat binary_little_endian 1.0\ncomment sparse-mpm particles, SI units, Y up\nelement vertex " +
                          std::to_string(n) +
                          "\nproperty double x\nproperty double y\nproperty double z\nproperty float vx\nproperty float vy\n"
@@ -47,6 +47,7 @@ void writePly(const std::string& path, const PointCloud& f) {
     if (J) header += "property float J\n";
     if (Jp) header += "property float Jp\n";
     if (stress) header += "property float stress_norm\n";
+    if (plastic) header += "property float plastic_strain\n";
     if (F)
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c) header += "property float F" + std::to_string(r) + std::to_string(c) + "\n";
@@ -67,6 +68,7 @@ void writePly(const std::string& path, const PointCloud& f) {
             if (J) rec.put<float>(f.J[i]);
             if (Jp) rec.put<float>(f.Jp[i]);
             if (stress) rec.put<float>(f.stressNorm[i]);
+            if (plastic) rec.put<float>(f.plasticStrain[i]);
             if (F)
                 for (int r = 0; r < 3; ++r)
                     for (int c = 0; c < 3; ++c) rec.put<float>(f.F[i](r, c));

@@ -12,6 +12,8 @@ PointAttributes PointAttributes::of(const std::vector<std::string>& requested) {
         else if (r == "Jp") a.Jp = true;
         else if (r == "stress_norm") a.stressNorm = true;
         else if (r == "F") a.F = true;
+        else if (r == "plastic_strain")
+            a.plasticStrain = true;
         else throw std::invalid_argument("unknown point attribute \"" + r + "\"");
     }
     return a;
@@ -41,6 +43,12 @@ void appendMaterialAttributes(const Sp& sp, const PointAttributes& a, PointCloud
                 f.Jp.push_back(M::plasticVolumeRatio(sp.state, i));
             else
                 f.Jp.push_back(1.0f);
+        }
+        if (a.plasticStrain) {
+            if constexpr (requires { M::plasticStrain(sp.state, i); })
+                f.plasticStrain.push_back(M::plasticStrain(sp.state, i));
+            else
+                f.plasticStrain.push_back(0.0f);
         }
     }
 }
@@ -93,6 +101,7 @@ PointCloud PointCloud::subset(const std::vector<int>& species) const {
         appendRange(out.J, J, a, b);
         appendRange(out.Jp, Jp, a, b);
         appendRange(out.stressNorm, stressNorm, a, b);
+        appendRange(out.plasticStrain, plasticStrain, a, b);
         appendRange(out.F, F, a, b);
         out.speciesStart.push_back(out.x.size());
     }

@@ -31,6 +31,7 @@ inline Vec3f defaultColour(const std::string& material) {
     if (material == "rubber") return {0.55f, 0.25f, 0.7f};
     if (material == "snow") return {0.92f, 0.94f, 0.97f};
     if (material == "sand") return {0.76f, 0.6f, 0.38f};
+    if (material == "metal") return {0.72f, 0.74f, 0.78f};
     return {0.6f, 0.6f, 0.6f};
 }
 
@@ -165,7 +166,7 @@ void outputKeys(V& v, OutputDesc& o) {
     v.choices(Key{.name = "attributes",
                   .help = "point attributes written beside P, v, id, material, set, pscale and Cd: J (volume ratio), Jp "
                           "(plastic volume ratio), stress_norm (Cauchy stress, Frobenius norm, Pa), F (elastic deformation "
-                          "gradient, 3x3)",
+                          "gradient, 3x3), plastic_strain (equivalent plastic strain of metal)",
                   .noun = "point attribute"},
               o.attributes, PointAttributes::names());
     v.choice(Key{.name = "rank_files",

@@ -104,6 +104,7 @@ PointDataGrid::Ptr makePoints(const PointCloud& f, double voxelSize, const VdbFr
         if (!f.J.empty()) addAttribute<float>(*grid, *index, "J", f.J);
         if (!f.Jp.empty()) addAttribute<float>(*grid, *index, "Jp", f.Jp);
         if (!f.stressNorm.empty()) addAttribute<float>(*grid, *index, "stress_norm", f.stressNorm);
+        if (!f.plasticStrain.empty()) addAttribute<float>(*grid, *index, "plastic_strain", f.plasticStrain);
         if (!f.F.empty()) addAttribute<openvdb::math::Mat3s>(*grid, *index, "F", f.F);
         const auto groups = addGroups(*grid, *index, f, full->materialNames, full->setNames);
         grid->insertMeta("group_names", openvdb::StringMetadata(nlohmann::json(groups).dump()));
@@ -229,7 +230,8 @@ PointsReadBack readVdbPoints(const std::string& path) {
         auto optional = [&](const char* name) {
             return leaf->hasAttribute(name) ? std::make_unique<FloatHandle>(leaf->constAttributeArray(name)) : nullptr;
         };
-        const auto pscale = optional("pscale"), J = optional("J"), Jp = optional("Jp"), stress = optional("stress_norm");
+        const auto pscale = optional("pscale"), J = optional("J"), Jp = optional("Jp"), stress = optional("stress_norm"),
+                   plastic = optional("plastic_strain");
         std::unique_ptr<openvdb::points::AttributeHandle<openvdb::Vec3f>> Cd;
         if (leaf->hasAttribute("Cd")) Cd = std::make_unique<openvdb::points::AttributeHandle<openvdb::Vec3f>>(leaf->constAttributeArray("Cd"));
         std::unique_ptr<openvdb::points::AttributeHandle<openvdb::math::Mat3s>> F;
@@ -249,6 +251,7 @@ PointsReadBack readVdbPoints(const std::string& path) {
             if (J) out.J.push_back(J->get(*it));
             if (Jp) out.Jp.push_back(Jp->get(*it));
             if (stress) out.stressNorm.push_back(stress->get(*it));
+            if (plastic) out.plasticStrain.push_back(plastic->get(*it));
             if (Cd) {
                 const openvdb::Vec3f c = Cd->get(*it);
                 out.Cd.emplace_back(c[0], c[1], c[2]);

@@ -40,7 +40,7 @@ struct PointsReadBack {
     std::vector<Vec3d> x;
     std::vector<Vec3f> v;
     std::vector<int32_t> id, material, set;
-    std::vector<float> pscale, J, Jp, stressNorm;
+    std::vector<float> pscale, J, Jp, stressNorm, plasticStrain;
     std::vector<Vec3f> Cd;
     std::vector<Mat3f> F;
     std::vector<std::string> materialNames, setNames;  ///< from the grid's metadata

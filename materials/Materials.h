@@ -19,6 +19,7 @@
 //     // optional, for output attributes (io/PointCloud.cpp; without them F = J^(1/3) I and Jp = 1):
 //     static Mat3f  deformationGradient(const State&, size_t i);                    // the elastic F the model keeps
 //     static float  plasticVolumeRatio(const State&, size_t i);                     // Jp, volume change from plasticity
+//     static float  plasticStrain(const State&, size_t i);                          // equivalent plastic strain
 //     // optional, for n <= simd::kLanes consecutive particles (the SVD-based models run their SVDs in SIMD lanes):
 //     static void   kirchhoffBatch(const Params&, const State&, size_t first, int n, Mat3f* tau);
 //     static void   updateDeformationBatch(const Params&, State&, size_t first, int n, const Mat3f* gradV, float dt);
@@ -36,6 +37,7 @@
 #include "materials/NeoHookean.h"
 #include "materials/Sand.h"
 #include "materials/Snow.h"
+#include "materials/VonMises.h"
 #include "materials/Water.h"
 
 #ifdef MPM_EXTRA_MATERIALS_HEADER
@@ -115,7 +117,8 @@ constexpr bool paramsUnique(MaterialList<Ms...>) {
     return ((countOf<typename Ms::Params, typename Ms::Params...> == 1) && ...);
 }
 
-using AllMaterials = MaterialList<Water, FixedCorotated, NeoHookean, Snow, Sand MPM_EXTRA_MATERIALS>;
+// Checkpoints name a material by its place here: a new one goes last.
+using AllMaterials = MaterialList<Water, FixedCorotated, NeoHookean, Snow, Sand, VonMises MPM_EXTRA_MATERIALS>;
 static_assert(checkMaterials(AllMaterials{}));
 static_assert(sceneNamesUnique(AllMaterials{}), "two materials share a kSceneName");
 static_assert(paramsUnique(AllMaterials{}), "two materials share a Params type (derive one of its own)");

@@ -252,6 +252,7 @@ TEST(MaterialBatch, StressAndReturnMapMatchOneParticleAtATime) {
     expectBatchMatchesScalar<Snow>();
     expectBatchMatchesScalar<Sand>();
     expectBatchMatchesScalar<NeoHookean>();  // no batch of its own: the fallback loop
+    expectBatchMatchesScalar<VonMises>();
 }
 
 TEST(NeoHookeanModel, InvertedElementIsReportedNotClamped) {
@@ -345,4 +346,91 @@ TEST(SandModel, VolumeCorrectionRestoresVolumeLostUnderTension) {
         else
             EXPECT_LT(J, 0.98f);  // without it the sand is compressed below rest
     }
+}
+
+namespace {
+/// One material point of metal pulled in uniaxial stress: the axial log strain grows by `step` a stage, and the
+/// lateral stretch rate is found by the secant method so that the lateral stress stays zero (to 1e-6 sigma_y).
+/// Each stage is one updateDeformation with dt 1, grad v = diag(step, r, r). Returns (axial log strain, axial
+/// Kirchhoff stress, equivalent plastic strain) after each stage.
+struct UniaxialStage {
+    double strain, stress, plastic;
+};
+std::vector<UniaxialStage> pullUniaxially(const VonMises::Params& m, double step, int stages) {
+    Species<VonMises> point;
+    point.params = m;
+    point.state.appendRest(1);
+    const auto lateralStress = [&](double r, VonMises::State& s) {
+        s = point.state;
+        const Mat3f L = Vec3f(float(step), float(r), float(r)).asDiagonal();
+        VonMises::updateDeformation(m, s, 0, L, 1.0f);
+        return double(VonMises::kirchhoff(m, s, 0)(1, 1));
+    };
+    std::vector<UniaxialStage> out;
+    double guess = -0.33 * step;
+    for (int k = 0; k < stages; ++k) {
+        VonMises::State s;
+        double a = guess, b = 0.9 * guess, fa = lateralStress(a, s), fb = lateralStress(b, s);
+        for (int it = 0; it < 50 && std::abs(fb) > 1e-6 * m.yieldStress && fb != fa; ++it) {
+            const double c = b - fb * (b - a) / (fb - fa);
+            a = b, fa = fb, b = c, fb = lateralStress(b, s);
+        }
+        guess = b;
+        point.state = s;
+        // The axial log strain: elastic (Fe's stretch) plus plastic (in uniaxial stress the axial plastic strain is the
+        // equivalent one). Taken from the state, not summed from the steps, which float rounds by up to 0.1% each.
+        const double strain = std::log(double(s.Fe[0](0, 0))) + double(s.alpha[0]);
+        out.push_back({strain, double(VonMises::kirchhoff(m, s, 0)(0, 0)), double(s.alpha[0])});
+    }
+    return out;
+}
+}  // namespace
+
+TEST(MetalModel, UniaxialTensionYieldsAtTheYieldStressAndHardensWithTheTangentModulus) {
+    // Aluminium (the preset): E 68.9 GPa, sigma_y 276 MPa (yield strain 0.4%), H 0.3 GPa. Pulled to 2% log strain
+    // in 2000 stages: elastic at E up to sigma_y, then along E H / (E + H) (Simo and Hughes 1998, sec. 2.2); the
+    // tolerances are float round-off (7 digits) over stages of 1e-5 strain, far inside the 2%.
+    const VonMises::Params m;
+    const double E = m.mu * (3.0 * m.lambda + 2.0 * m.mu) / (m.lambda + m.mu);
+    const std::vector<UniaxialStage> path = pullUniaxially(m, 1e-5, 2000);
+    std::size_t firstPlastic = path.size();
+    for (std::size_t k = 0; k < path.size() && firstPlastic == path.size(); ++k)
+        if (path[k].plastic > 0.0) firstPlastic = k;
+    ASSERT_LT(firstPlastic, path.size());
+    // Before yield: Hencky's uniaxial stress is exactly E times the log strain.
+    const UniaxialStage& last = path[firstPlastic - 1];
+    EXPECT_NEAR(last.stress, E * last.strain, 1e-4 * last.stress);
+    // Yield within one stage of sigma_y / E, at sigma_y.
+    EXPECT_NEAR(path[firstPlastic].strain, m.yieldStress / E, 1.5e-5);
+    EXPECT_NEAR(path[firstPlastic].stress, m.yieldStress, 0.002 * m.yieldStress);
+    // Hardening: the slope from 1% to 2% strain, and the plastic strain is the strain less the elastic part.
+    const UniaxialStage &a = path[999], &b = path.back();
+    const double tangent = E * m.hardening / (E + m.hardening);
+    EXPECT_NEAR((b.stress - a.stress) / (b.strain - a.strain), tangent, 0.01 * tangent);
+    EXPECT_NEAR(b.stress, m.yieldStress + m.hardening * b.plastic, 1e-3 * b.stress);
+    EXPECT_NEAR(b.plastic, b.strain - b.stress / E, 1e-3 * b.plastic);
+}
+
+TEST(MetalModel, PlasticFlowKeepsTheVolumeAndPressureNeverYields) {
+    // J2 flow is deviatoric: a hydrostatic squeeze to 10% of the volume stays elastic (no plastic strain, stress
+    // K ln J), and a shear far past yield leaves the volume as the elastic trial had it.
+    VonMises::Params m;
+    Species<VonMises> p;
+    p.state.appendRest(2);
+    const float c = float(std::cbrt(0.9) - 1.0);  // F = (1 + c) I: J = 0.9
+    VonMises::updateDeformation(m, p.state, 0, Vec3f::Constant(c).asDiagonal(), 1.0f);
+    EXPECT_EQ(p.state.alpha[0], 0.0f);
+    EXPECT_NEAR(VonMises::volumeRatio(p.state, 0), 0.9f, 1e-6f);
+    const double K = m.lambda + 2.0 / 3.0 * m.mu;
+    EXPECT_NEAR(VonMises::kirchhoff(m, p.state, 0).trace() / 3.0, K * std::log(0.9), 1e-4 * K * std::abs(std::log(0.9)));
+    Mat3f shear = Mat3f::Zero();
+    shear(0, 1) = 0.05f;  // 5% shear: 30 times the shear yield strain
+    const float before = (Mat3f::Identity() + shear).determinant();
+    VonMises::updateDeformation(m, p.state, 1, shear, 1.0f);
+    EXPECT_GT(p.state.alpha[1], 0.0f);
+    EXPECT_NEAR(VonMises::volumeRatio(p.state, 1), before, 1e-5f);
+    // On the yield surface after the return: |dev tau| = sqrt(2/3) (sigma_y + H alpha).
+    const Mat3f tau = VonMises::kirchhoff(m, p.state, 1);
+    const Mat3f dev = tau - tau.trace() / 3.0f * Mat3f::Identity();
+    EXPECT_NEAR(dev.norm(), std::sqrt(2.0 / 3.0) * (m.yieldStress + m.hardening * p.state.alpha[1]), 1e-4 * m.yieldStress);
 }
