@@ -21,10 +21,6 @@ CaseResult run(const std::string& name, int level) {
     return findCase(name).run(c);
 }
 
-double detailValue(const std::string& detail, const std::string& key) {
-    const auto at = detail.find(key + "=");
-    return at == std::string::npos ? NAN : std::stod(detail.substr(at + key.size() + 1));
-}
 }  // namespace
 
 TEST(MultiField, TwoElasticSpheresBounceAndPartLosingUnderFivePercent) {

@@ -104,3 +104,11 @@ TEST(Validation, ASphereDroppedOnAPlaneTouchesForHertzsContactTime) {
     const CaseResult r = run("sphere_drop", 1);
     EXPECT_TRUE(r.pass) << r.error << " " << r.detail;
 }
+
+TEST(Validation, AMetalBarPulledInTensionYieldsAtTheYieldStressAndHardensAtTheTangentModulus) {
+    // Case 12 at dx = 0.01 m: measured yield stress 3998.8 Pa of 4000, hardening slope 0.12% under E H / (E + H),
+    // the particles' plastic strain 0.14% off the strain less its elastic part.
+    const CaseResult r = run("metal_bar_tension", 0);
+    EXPECT_TRUE(r.pass) << r.error << " " << r.detail;
+    EXPECT_LT(detailValue(r.detail, "plastic_error"), 0.01) << r.detail;
+}

@@ -3,6 +3,7 @@
 // scenes/validation/, refines it, runs it and measures its error with the metric defined here. Used by
 // `mpm_report` (error against run time, over resolutions and accuracy/speed choices) and, at their
 // cheapest settings, by the unit tests.
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -31,6 +32,12 @@ struct CaseResult {
     double wallSeconds = 0.0;  ///< simulation only, set-up and measuring excluded
     std::string detail;        ///< secondary numbers, "key=value;..."
 };
+
+/// A number from CaseResult::detail ("key=value;..."); NaN when the key is not there.
+inline double detailValue(const std::string& detail, const std::string& key) {
+    const auto at = detail.find(key + "=");
+    return at == std::string::npos ? std::nan("") : std::stod(detail.substr(at + key.size() + 1));
+}
 
 struct ValidationCase {
     std::string name;
