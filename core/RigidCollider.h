@@ -105,7 +105,7 @@ public:
             const Vec3d x = (leaf.origin + leafLocal(n)).cast<double>() * dx;
             Vec3d rest = f.still ? x : f.pose.toRest(x);
             // Most nodes near a wall lie outside it: the normal (dearer for a level set) only where the wall acts.
-            if (onSurface(sign_ * geometry_.phi(rest, t, c), dx) > 0.0) return;
+            if (!acts(onSurface(sign_ * geometry_.phi(rest, t, c), dx), dx, still)) return;
             Vec3d normal;
             double phi;
             nodeDistance(x, f, t, dx, c, rest, phi, normal);
@@ -116,6 +116,9 @@ public:
             Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
             const Vec3f before = v;
             if (boundary() == Boundary::Sticky) {
+                // In front of the wall the row holds material glued to it (at rest on it or pulled from it), not
+                // material still arriving: that one the wall meets where it did before.
+                if (phi > 0.0 && (v - vc).dot(nWorld) < 0.0f) return;
                 v = vc;
             } else {
                 const Vec3f rel = v - vc;
@@ -239,6 +242,21 @@ private:
         f = Frame{motion_.at(t), motion_.ratesAt(t), !moving()};
         const Vec3d centre = (origin.cast<double>() + Vec3d::Constant(0.5 * (kLeafDim - 1))) * dx;
         return !skip(f.still ? centre : f.pose.toRest(centre), t, c, reach);
+    }
+    /// How far in front of a sticky wall its nodes are held [cells]. Material glued to a wall fills the cells up to
+    /// it, so the row of nodes nearest the wall on the material's side follows the wall, whatever the wall's place on
+    /// the grid. Held only behind the wall, a wall just past a row of nodes left the material to the next row, which
+    /// its particles barely reach (3% of their weight): a jelly block hanging from a sticky ceiling 0.01 cell past a
+    /// row fell off, and a moving grip let go of a bar once it had passed a row. Short of half a cell: a wall halfway
+    /// between rows holds the row behind it, as mirror mode (wall_ghosts) expects there. Only material at rest on the
+    /// wall or moving away from it is held there (applyToLeaf): arriving material is met where it was before.
+    static constexpr double kStickyReachCells = 0.5 - 1e-6;  ///< the float rounding of a wall exactly halfway stays out
+    /// Whether the wall acts on a node at signed distance phi (positive on the material's side). Only a still wall holds
+    /// the row in front of it: a moving one changes rows as it travels, and holding rows in front of a turning drum's
+    /// wall changed its sand's avalanche (a dynamic incline of 44-51 degrees in the last second, against 43-48), so
+    /// moving walls keep to the rows behind them until the hold fades with the distance (docs/method.md, section 7).
+    bool acts(double phi, double dx, bool still) const {
+        return boundary() == Boundary::Sticky && still ? phi < kStickyReachCells * dx : phi <= 0.0;
     }
     /// A signed distance within kOnSurfaceCells of zero is zero: a node on the surface (a floor on the grid's lines)
     /// is on it whichever way its position rounds through a pose. Without this a platform moved by keyframes held

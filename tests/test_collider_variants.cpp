@@ -244,3 +244,32 @@ TEST(DefaultWall, WaterPouredDownARampLeavesItsLip) {
     EXPECT_GT(slip.under, 20);  // the check sees wrapping where it happens
     EXPECT_GT(byDefault.onFloor, 2 * slip.onFloor);
 }
+
+TEST(StickyWall, ABlockHangingFromAStickyCeilingHangsWhereverTheCeilingLiesOnTheGrid) {
+    // A jelly block 0.2 m tall glued under a sticky plane, the plane 0, 0.01, 0.05, 0.25, 0.5, 0.75 and 0.99 of a
+    // cell past a row of nodes. The wall used to hold only the nodes behind it: 0.01 of a cell past a row, the
+    // block's top layer reached the row behind with 3% of its weight and the block fell 60 cells in 0.5 s (15 in these 0.25 s).
+    // Now it hangs at every placement; its mean, measured from the ceiling, agrees to 0.03 dx (measured) across them, and its top
+    // stays a quarter cell (half the particle spacing) under the ceiling.
+    const double dx = 0.02;
+    std::vector<double> drop;
+    for (double phase : {0.0, 0.01, 0.05, 0.25, 0.5, 0.75, 0.99}) {
+        const double top = 0.5 + phase * dx;
+        const json scene = {
+            {"simulation", {{"frames", 6}, {"dx", dx}}},
+            {"sets",
+             {{{"material", "jelly"},
+               {"sampling", "lattice"},
+               {"shape", {{"type", "box"}, {"min", {-0.1, top - 0.2, -0.1}}, {"max", {0.1, top, 0.1}}}}}}},
+            {"colliders", {{{"type", "plane"}, {"point", {0, top, 0}}, {"normal", {0, -1, 0}}, {"boundary", "sticky"}}}}};
+        auto sim = build(scene, "hanging.json");
+        while (sim->state().frame < 6) sim->advanceFrame();
+        const ParticleArrays& P = particlesOf(sim->species().at(0));
+        double mean = 0.0, highest = -1e9;
+        for (const Vec3d& x : P.x) mean += x[1], highest = std::max(highest, x[1]);
+        mean /= double(P.size());
+        drop.push_back(top - mean);
+        EXPECT_LT(top - highest, 0.35 * dx) << "phase " << phase;
+    }
+    for (double d : drop) EXPECT_NEAR(d, drop.front(), 0.05 * dx);
+}

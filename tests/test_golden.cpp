@@ -73,7 +73,7 @@ const GoldenScene kScenes[] = {
       "sets": [ { "material": "jelly", "shape": { "type": "box", "min": [-0.15, 0.3, -0.15], "max": [0.15, 0.6, 0.15] },
                   "velocity": [0.5, -2, 0], "sampling": "grid" } ],
       "colliders": [ { "type": "sphere", "center": [0, 0, 0], "radius": 0.25, "boundary": "sticky" } ] })",
-     1, 20, 0xe04e65b737f84fdfull},
+     1, 20, 0xba8d8b67afe87a0eull},
     {"rubber_mls", R"({
       "simulation": { "dx": 0.05, "substeps": 5, "force": "mls", "wall_contact": "surface" },
       "sets": [ { "material": "rubber", "shape": { "type": "sphere", "center": [0, 0.2, 0], "radius": 0.15 },
