@@ -112,7 +112,8 @@ public:
             // A `separate` wall is unilateral contact: it acts once the material's surface has reached it.
             if (boundary() == Boundary::Separate && !surface.touches(m, phi / dx)) return;
             const Vec3f nWorld = normal.template cast<float>();
-            const Vec3f vc = still ? Vec3f(Vec3f::Zero()) : Vec3f(velocityAt(x, rest, f.pose, f.rates, t, c).template cast<float>());
+            const Vec3f vc =
+                still ? Vec3f(Vec3f::Zero()) : Vec3f(velocityAt(x, rest, f.pose, f.rates, t, c).template cast<float>());
             Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
             const Vec3f before = v;
             if (boundary() == Boundary::Sticky) {
@@ -142,7 +143,9 @@ public:
             const float keep = patches.keep(p.node, friction());
             Eigen::Map<Vec3f> v(leaf.momentum + 3 * p.node);
             v = p.vc + keep * p.vt;
-            if (!still) work += double(leaf.mass[p.node]) * ((keep - 1.0f) * p.vt).template cast<double>().dot(p.vc.template cast<double>());
+            if (!still)
+                work +=
+                    double(leaf.mass[p.node]) * ((keep - 1.0f) * p.vt).template cast<double>().dot(p.vc.template cast<double>());
         }
         return work;
     }
@@ -166,14 +169,15 @@ public:
             const Vec3i node = image.array().round().template cast<int>();
             if ((image - node.template cast<double>()).cwiseAbs().maxCoeff() > kOnNode) return;
             const Vec3d surface = x - phi * normal;
-            const Vec3f vc = f.still ? Vec3f(Vec3f::Zero())
-                                     : Vec3f(velocityAt(surface, f.pose.toRest(surface), f.pose, f.rates, t, c).template cast<float>());
+            const Vec3f vc =
+                f.still ? Vec3f(Vec3f::Zero())
+                        : Vec3f(velocityAt(surface, f.pose.toRest(surface), f.pose, f.rates, t, c).template cast<float>());
             out.push_back({n, node, phi, normal.template cast<float>(), vc});
         });
     }
 
-    ProjectionResult projectParticles(ParticleArrays& P, uint32_t begin, uint32_t end, const Vec3i& leafOrigin, double dx, double t,
-                                      float dt, const Vec3d& gravity, ColliderContext* context) const override {
+    ProjectionResult projectParticles(ParticleArrays& P, uint32_t begin, uint32_t end, const Vec3i& leafOrigin, double dx,
+                                      double t, float dt, const Vec3d& gravity, ColliderContext* context) const override {
         ProjectionResult out;
         if (begin == end) return out;
         typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
@@ -210,8 +214,8 @@ public:
             if (!(len > 0.0)) continue;
             n /= len;
             const Vec3d moved = at - (sign_ * phiAt) * n;
-            const Vec3f vc =
-                still ? Vec3f(Vec3f::Zero()) : Vec3f(velocityAt(moved, pose.toRest(moved), pose, rates, t, c).template cast<float>());
+            const Vec3f vc = still ? Vec3f(Vec3f::Zero())
+                                   : Vec3f(velocityAt(moved, pose.toRest(moved), pose, rates, t, c).template cast<float>());
             const Vec3f before = v;
             const Vec3f rel = v - vc;
             if (rel.dot(n.cast<float>()) < 0.0f || boundary() == Boundary::Sticky)
@@ -267,8 +271,8 @@ private:
     }
     /// A node's rest-frame position, its signed distance (positive on the material's side) and the outward
     /// normal in world axes.
-    void nodeDistance(const Vec3d& x, const Frame& f, double t, double dx, typename Geometry::Context& c, Vec3d& rest, double& phi,
-                      Vec3d& normal) const {
+    void nodeDistance(const Vec3d& x, const Frame& f, double t, double dx, typename Geometry::Context& c, Vec3d& rest,
+                      double& phi, Vec3d& normal) const {
         rest = f.still ? x : f.pose.toRest(x);
         geometry_.phiNormal(rest, t, c, phi, normal);
         phi = onSurface(sign_ * phi, dx);

@@ -2,9 +2,9 @@
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <openvdb/tools/FastSweeping.h>
 #include <openvdb/tools/GridTransformer.h>
 #include <openvdb/tools/LevelSetMeasure.h>
-#include <openvdb/tools/FastSweeping.h>
 #include <openvdb/tools/MeshToVolume.h>
 
 #include <algorithm>
@@ -41,8 +41,8 @@ TriangleMesh readMesh(const std::string& path) {
     // Positions only: normals, UVs and materials would keep equal corners apart.
     importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_NORMALS | aiComponent_TEXCOORDS | aiComponent_COLORS |
                                                             aiComponent_TANGENTS_AND_BITANGENTS | aiComponent_MATERIALS);
-    const aiScene* scene =
-        importer.ReadFile(path, aiProcess_Triangulate | aiProcess_RemoveComponent | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
+    const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_RemoveComponent |
+                                                       aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
     if (!scene || !scene->mRootNode) throw LevelSetError(path + ": cannot read the mesh: " + importer.GetErrorString());
     TriangleMesh mesh;
     std::unordered_map<std::string, int> index;  // welds corners of different sub-meshes at one position
@@ -82,8 +82,8 @@ double meshFieldBytes(const TriangleMesh& mesh, double voxelSize, double bandWid
     return leaves * kLeafVoxels * kLeafVoxels * kLeafVoxels * kBytesPerVoxel;
 }
 
-std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std::string& path, double voxelSize, double thickness,
-                                             double exteriorBand, double interiorBand, double reach) {
+std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std::string& path, double voxelSize,
+                                             double thickness, double exteriorBand, double interiorBand, double reach) {
     const std::size_t open = mesh.openEdges();
     if (open > 0 && thickness <= 0.0)
         throw LevelSetError(path + ": the mesh is open (" + std::to_string(open) +
@@ -122,7 +122,8 @@ openvdb::GridBase::Ptr readVdbGrid(const std::string& path, const std::string& g
         openvdb::io::File file(path);
         file.open();
         if (!file.hasGrid(gridName)) {
-            // OpenVDB lists an unnamed grid as "[i]", i its place among the unnamed ones: worth saying, or it reads as no name at all.
+            // OpenVDB lists an unnamed grid as "[i]", i its place among the unnamed ones: worth saying, or it reads as no name at
+            // all.
             std::string names;
             bool unnamed = false;
             for (auto it = file.beginName(); it != file.endName(); ++it) {
@@ -146,7 +147,9 @@ std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::
                                             const Placement& placement, double band) {
     const openvdb::GridBase::Ptr base = readVdbGrid(path, gridName);
     auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
-    if (!grid) throw LevelSetError(path + ": grid \"" + gridName + "\" holds " + base->valueType() + " values; a level set holds floats");
+    if (!grid)
+        throw LevelSetError(path + ": grid \"" + gridName + "\" holds " + base->valueType() +
+                            " values; a level set holds floats");
     if (grid->getGridClass() != openvdb::GRID_LEVEL_SET)
         throw LevelSetError(path + ": grid \"" + gridName + "\" is a " + gridClassName(grid->getGridClass()) +
                             ", not a level set; a collider needs a signed distance field (Houdini: VDB from Polygons, distance)");
@@ -204,7 +207,9 @@ TriangleMesh placed(TriangleMesh mesh, const Placement& placement) {
 std::shared_ptr<const VectorField> vdbVectorField(const std::string& path, const std::string& gridName) {
     const openvdb::GridBase::Ptr base = readVdbGrid(path, gridName);
     auto grid = openvdb::gridPtrCast<openvdb::Vec3SGrid>(base);
-    if (!grid) throw LevelSetError(path + ": grid \"" + gridName + "\" holds " + base->valueType() + " values; a velocity grid holds vec3s");
+    if (!grid)
+        throw LevelSetError(path + ": grid \"" + gridName + "\" holds " + base->valueType() +
+                            " values; a velocity grid holds vec3s");
     auto holder = std::make_shared<VectorField::Grid>();
     holder->grid = grid;
     return std::make_shared<const VectorField>(holder);
@@ -248,7 +253,8 @@ std::vector<int> sequenceFrames(const std::string& pattern) {
             name.compare(name.size() - p.after.size(), p.after.size(), p.after) != 0)
             continue;
         const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - p.after.size());
-        if (digits.empty() || !std::all_of(digits.begin(), digits.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); }))
+        if (digits.empty() ||
+            !std::all_of(digits.begin(), digits.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); }))
             continue;
         frames.push_back(std::stoi(digits));
     }

@@ -40,8 +40,8 @@ double meshFieldBytes(const TriangleMesh& mesh, double voxelSize, double bandWid
 /// A closed mesh as a solid (thickness 0), or any mesh as a shell of half-thickness `thickness` around its
 /// surface. The band reaches `exteriorBand` outside the surface and `interiorBand` inside [m]; `reach` is the
 /// LevelSet's (how far from the band a point still needs the field).
-std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std::string& path, double voxelSize, double thickness,
-                                             double exteriorBand, double interiorBand, double reach);
+std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std::string& path, double voxelSize,
+                                             double thickness, double exteriorBand, double interiorBand, double reach);
 
 /// The level set grid `grid` of a VDB file. A grid that is not a level set (a fog volume) is an error naming
 /// its class; a grid with a rotated or non-uniform transform is resampled onto an axis-aligned one.

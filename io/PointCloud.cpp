@@ -8,13 +8,18 @@ namespace mpm {
 PointAttributes PointAttributes::of(const std::vector<std::string>& requested) {
     PointAttributes a;
     for (const std::string& r : requested) {
-        if (r == "J") a.J = true;
-        else if (r == "Jp") a.Jp = true;
-        else if (r == "stress_norm") a.stressNorm = true;
-        else if (r == "F") a.F = true;
+        if (r == "J")
+            a.J = true;
+        else if (r == "Jp")
+            a.Jp = true;
+        else if (r == "stress_norm")
+            a.stressNorm = true;
+        else if (r == "F")
+            a.F = true;
         else if (r == "plastic_strain")
             a.plasticStrain = true;
-        else throw std::invalid_argument("unknown point attribute \"" + r + "\"");
+        else
+            throw std::invalid_argument("unknown point attribute \"" + r + "\"");
     }
     return a;
 }
@@ -80,7 +85,8 @@ PointCloud gatherPoints(const std::vector<AnySpecies>& species, const std::vecto
         f.material.insert(f.material.end(), P.size(), s < materialOfSpecies.size() ? materialOfSpecies[s] : 0);
         f.set.insert(f.set.end(), P.set.begin(), P.set.end());
         if (!attributes.setColours.empty())
-            for (uint16_t set : P.set) f.Cd.push_back(set < attributes.setColours.size() ? attributes.setColours[set] : Vec3f::Ones());
+            for (uint16_t set : P.set)
+                f.Cd.push_back(set < attributes.setColours.size() ? attributes.setColours[set] : Vec3f::Ones());
         std::visit([&](const auto& sp) { appendMaterialAttributes(sp, attributes, f); }, species[s]);
         f.speciesStart.push_back(f.x.size());
     }

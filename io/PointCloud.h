@@ -13,10 +13,10 @@ namespace mpm {
 /// What a frame's points carry beyond P, v, id, material, set and pscale: Cd from the sets' colours and the
 /// attributes a scene asks for in output.attributes.
 struct PointAttributes {
-    bool J = false;           ///< volume ratio det F
-    bool Jp = false;          ///< plastic volume ratio (1 for models without plasticity)
-    bool stressNorm = false;  ///< Frobenius norm of the Cauchy stress [Pa]
-    bool F = false;           ///< the elastic deformation gradient the model keeps (J^(1/3) I for a fluid)
+    bool J = false;                 ///< volume ratio det F
+    bool Jp = false;                ///< plastic volume ratio (1 for models without plasticity)
+    bool stressNorm = false;        ///< Frobenius norm of the Cauchy stress [Pa]
+    bool F = false;                 ///< the elastic deformation gradient the model keeps (J^(1/3) I for a fluid)
     bool plasticStrain = false;     ///< equivalent plastic strain (0 for models without it)
     std::vector<Vec3f> setColours;  ///< Cd per set (linear RGB); empty: no Cd
 
@@ -36,7 +36,7 @@ struct PointCloud {
     std::vector<float> pscale;  ///< radius [m]: half the side of the particle's cube of current volume, (J V0)^(1/3) / 2
     std::vector<Vec3f> Cd;      ///< colour of the particle's set; empty unless asked for
     std::vector<float> J, Jp, stressNorm, plasticStrain;  ///< empty unless asked for
-    std::vector<Mat3f> F;                  ///< empty unless asked for
+    std::vector<Mat3f> F;                                 ///< empty unless asked for
     /// The particles of species s are [speciesStart[s], speciesStart[s + 1]).
     std::vector<std::size_t> speciesStart{0};
 

@@ -1,16 +1,16 @@
 #include "io/Run.h"
 
+#include <unistd.h>
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <regex>
-#include <nlohmann/json.hpp>
 #include <sstream>
-#include <unistd.h>
 
 #include "io/AtomicFile.h"
 #include "io/Checkpoint.h"
@@ -38,7 +38,8 @@ std::regex checkpointsOf(const std::string& scene) {
     return std::regex("^" + regexEscape(scene) + R"(_checkpoint_[0-9]{4,}(_rank[0-9]{3,})?\.mpmc$)");
 }
 /// The temporary files this program writes, of any scene (one run per directory: none is in use now).
-const std::regex kTemporary(R"(^(.+_(points_|checkpoint_)?[0-9]{4,}(_rank[0-9]{3,})?\.(vdb|ply|mpmc)|stats\.csv|scene\.json)\.tmp[0-9]+$)");
+const std::regex kTemporary(
+    R"(^(.+_(points_|checkpoint_)?[0-9]{4,}(_rank[0-9]{3,})?\.(vdb|ply|mpmc)|stats\.csv|scene\.json)\.tmp[0-9]+$)");
 
 /// Runs fn on the ranks where `here` is true and has every rank throw what the first of them to fail threw,
 /// as the same kind of error, so that all of them stop together and one of them reports it.
@@ -82,11 +83,16 @@ void agreeOnFailure(const Comm& comm, bool here, F&& fn) {
     what.assign(reinterpret_cast<const char*>(b.data()) + r.at, b.size() - r.at);
     if (error && comm.rank() == reporter) std::rethrow_exception(error);
     switch (kind) {
-    case kScene: throw SceneError(what);
-    case kLock: throw LockError(what);
-    case kWrite: throw WriteError(path, what.size() > path.size() + 2 ? what.substr(path.size() + 2) : what);
-    case kLimit: throw LimitExceeded(what);
-    default: throw std::runtime_error(what);
+        case kScene:
+            throw SceneError(what);
+        case kLock:
+            throw LockError(what);
+        case kWrite:
+            throw WriteError(path, what.size() > path.size() + 2 ? what.substr(path.size() + 2) : what);
+        case kLimit:
+            throw LimitExceeded(what);
+        default:
+            throw std::runtime_error(what);
     }
 }
 
@@ -176,8 +182,10 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
 void SceneRun::writeFrame(int frame, const FrameStats& st, bool write) {
     const Comm& comm = Comm::world();
     if (!comm.distributed()) {
-        if (write) writer_->writeFrame(frame, *sim_, st);
-        else writer_->recordStats(st);
+        if (write)
+            writer_->writeFrame(frame, *sim_, st);
+        else
+            writer_->recordStats(st);
         return;
     }
     if (partWriter_) {
@@ -188,8 +196,10 @@ void SceneRun::writeFrame(int frame, const FrameStats& st, bool write) {
     }
     const std::vector<AnySpecies> all = write ? sim_->gatherSpecies() : std::vector<AnySpecies>{};
     onRoot(comm, [&] {
-        if (write) writer_->writeFrame(frame, all, sim_->settings().dx, st);
-        else writer_->recordStats(st);
+        if (write)
+            writer_->writeFrame(frame, all, sim_->settings().dx, st);
+        else
+            writer_->recordStats(st);
     });
 }
 
@@ -221,12 +231,14 @@ void SceneRun::refuseNamesTooLong() const {
     // suffix (<scene>_checkpoint_NNNN_rankRRR.mpmc.tmpPID). Found now, not at the first frame's write minutes later.
     constexpr std::size_t kPidDigits = 10;
     const std::size_t frameDigits = std::max<std::size_t>(4, std::to_string(scene_.frames).size());
-    const std::size_t longest = scene_.name.size() + std::strlen("_checkpoint_") + frameDigits + std::strlen("_rank000.mpmc.tmp") + kPidDigits;
+    const std::size_t longest =
+        scene_.name.size() + std::strlen("_checkpoint_") + frameDigits + std::strlen("_rank000.mpmc.tmp") + kPidDigits;
     const long limit = ::pathconf(dir_.c_str(), _PC_NAME_MAX);
     if (limit > 0 && longest > std::size_t(limit))
         throw SceneError(scene_.file + ": the scene's name (its file's, " + std::to_string(scene_.name.size()) +
-                         " characters) makes file names of up to " + std::to_string(longest) + " characters, and " + dir_ + " takes " +
-                         std::to_string(limit) + ": give the scene file a shorter name (its frames are named after it)");
+                         " characters) makes file names of up to " + std::to_string(longest) + " characters, and " + dir_ +
+                         " takes " + std::to_string(limit) +
+                         ": give the scene file a shorter name (its frames are named after it)");
 }
 
 void SceneRun::refuseAnotherScenesDirectory() const {
@@ -243,7 +255,8 @@ void SceneRun::refuseAnotherScenesDirectory() const {
         return;  // not a record of ours: nothing of a scene to protect
     }
     if (owner.empty() || owner == scene_.name) return;
-    throw SceneError(dir_ + ": holds the frames of scene \"" + owner + "\" (its scene.json); an output directory holds one scene's " +
+    throw SceneError(dir_ + ": holds the frames of scene \"" + owner +
+                     "\" (its scene.json); an output directory holds one scene's " +
                      "frames, stats.csv and scene.json: give scene \"" + scene_.name + "\" a directory of its own with -o");
 }
 
@@ -251,7 +264,8 @@ void SceneRun::removeStaleTemporaries() {
     int removed = 0;
     std::error_code ec;
     for (const auto& e : fs::directory_iterator(dir_, ec))
-        if (e.is_regular_file() && std::regex_match(e.path().filename().string(), kTemporary) && fs::remove(e.path(), ec)) ++removed;
+        if (e.is_regular_file() && std::regex_match(e.path().filename().string(), kTemporary) && fs::remove(e.path(), ec))
+            ++removed;
     if (removed) events_.note("removed " + std::to_string(removed) + " temporary files of an earlier run that was stopped");
 }
 
@@ -261,10 +275,12 @@ void SceneRun::removeOldOutputs() {
     std::error_code ec;
     for (const auto& e : fs::directory_iterator(dir_, ec)) {
         const std::string name = e.path().filename().string();
-        if (e.is_regular_file() && (std::regex_match(name, frames) || std::regex_match(name, checkpoints)) && fs::remove(e.path(), ec))
+        if (e.is_regular_file() && (std::regex_match(name, frames) || std::regex_match(name, checkpoints)) &&
+            fs::remove(e.path(), ec))
             ++removed;
     }
-    if (removed) events_.note("removed " + std::to_string(removed) + " frame and checkpoint files of an earlier run of this scene");
+    if (removed)
+        events_.note("removed " + std::to_string(removed) + " frame and checkpoint files of an earlier run of this scene");
 }
 
 void SceneRun::spread() { sim_->distribute(Comm::world()); }
@@ -289,7 +305,8 @@ void SceneRun::chooseStart() {
         if (!readCheckpointOf(files, c, share, path)) continue;
         if (c.info.sceneHash != hash_) {
             std::string changes;
-            for (const std::string& d : sceneDifferences(c.info.sceneJson, identity_)) changes += (changes.empty() ? "" : "; ") + d;
+            for (const std::string& d : sceneDifferences(c.info.sceneJson, identity_))
+                changes += (changes.empty() ? "" : "; ") + d;
             if (options_.resume && !options_.force)
                 throw SceneError(scene_.file + ": the scene changed since " + path + " was written (" + changes +
                                  "); run without --resume to start over, or add --force to resume anyway");
@@ -308,7 +325,8 @@ void SceneRun::chooseStart() {
         statsSoFar_ = c.info.statsCsv;
         start_ = c.info.frame;
         restored_ = true;
-        events_.note("continuing from " + path + " (" + (c.info.midFrame ? "inside frame " + std::to_string(start_ + 1) : "after frame " + std::to_string(start_)) +
+        events_.note("continuing from " + path + " (" +
+                     (c.info.midFrame ? "inside frame " + std::to_string(start_ + 1) : "after frame " + std::to_string(start_)) +
                      ", t = " + std::to_string(c.info.time) + " s)");
         return;
     }
@@ -350,10 +368,13 @@ bool SceneRun::readCheckpointOf(const CheckpointFiles& files, Checkpoint& c, boo
         for (long long k = 0; k < N; ++k) {
             if (k * M / N != comm.rank()) continue;
             Checkpoint part = readCheckpoint(paths[std::size_t(k)]);
-            if (first) c = std::move(part), first = false;
-            else appendSpecies(c.state, std::move(part.state));
+            if (first)
+                c = std::move(part), first = false;
+            else
+                appendSpecies(c.state, std::move(part.state));
         }
-    }) : setError;
+    })
+                                                   : setError;
     if (!partError.empty()) {
         events_.warning(partError + "; trying the one before");
         return false;
@@ -369,8 +390,10 @@ bool SceneRun::readCheckpointOf(const CheckpointFiles& files, Checkpoint& c, boo
             putArray(skeleton, bytes.data(), bytes.size());
         }
         skeleton = comm.broadcast(skeleton, 0);
-        if (first) c = decodeCheckpoint(std::vector<char>(reinterpret_cast<const char*>(skeleton.data()),
-                                                          reinterpret_cast<const char*>(skeleton.data()) + skeleton.size()), path);
+        if (first)
+            c = decodeCheckpoint(std::vector<char>(reinterpret_cast<const char*>(skeleton.data()),
+                                                   reinterpret_cast<const char*>(skeleton.data()) + skeleton.size()),
+                                 path);
         share = true;
     }
     return true;
@@ -473,10 +496,11 @@ void SceneRun::reportRanks() {
     const double share = comm.max(t.total() > 0.0 ? t.communication / t.total() : 0.0);
     const double held = comm.max(double(heldSamples_));
     char line[320];
-    std::snprintf(line, sizeof line,
-                  "%d ranks: %.0f to %.0f particles each at the end; leaves re-cut %d times; at most %.3g MB sent by a rank, "
-                  "at most %.1f%% of a rank's substep time spent communicating; at most %.0f of the sets' %lld samples held by a rank",
-                  comm.size(), fewest, most, sim_->rebalanceCount(), sent / 1e6, 100.0 * share, held, setSamples_);
+    std::snprintf(
+        line, sizeof line,
+        "%d ranks: %.0f to %.0f particles each at the end; leaves re-cut %d times; at most %.3g MB sent by a rank, "
+        "at most %.1f%% of a rank's substep time spent communicating; at most %.0f of the sets' %lld samples held by a rank",
+        comm.size(), fewest, most, sim_->rebalanceCount(), sent / 1e6, 100.0 * share, held, setSamples_);
     events_.note(line);
 }
 

@@ -453,19 +453,22 @@ const std::vector<ValidationCase>& cases() {
         for (const auto& [suffix, ghosts] : {std::pair{"", WallGhosts::Held}, std::pair{"_mirror", WallGhosts::Mirror}}) {
             const WallGhosts g = ghosts;
             v.push_back({std::string("vibrating_bar") + suffix, "|T - T_exact| / T_exact, mode 1 (L = 25, T = 10)",
-                         "< 1% at L/dx >= 25, energy drift < 1% per period", 0, 2, 1, [g](const CaseConfig& c) { return vibratingBar(c, g); }});
-            v.push_back({std::string("manufactured") + suffix, "max over t of the L2 displacement error / G, G = 1e-4 (Kamojjala et al. 2013)",
-                         "observed order >= 1.5 (about second order in dx)", 1, 2, 1, [g](const CaseConfig& c) { return manufactured(c, g); },
-                         kManufacturedOrder});
+                         "< 1% at L/dx >= 25, energy drift < 1% per period", 0, 2, 1,
+                         [g](const CaseConfig& c) { return vibratingBar(c, g); }});
+            v.push_back({std::string("manufactured") + suffix,
+                         "max over t of the L2 displacement error / G, G = 1e-4 (Kamojjala et al. 2013)",
+                         "observed order >= 1.5 (about second order in dx)", 1, 2, 1,
+                         [g](const CaseConfig& c) { return manufactured(c, g); }, kManufacturedOrder});
         }
         // Held, and (_mirror) mirrored: the clamp's sticky wall mirrors odd, an exact image for motion along its
         // normal but not for bending (docs/method.md, section 7); the tank's frictionless walls mirror exactly.
         for (const auto& [suffix, ghosts] : {std::pair{"", WallGhosts::Held}, std::pair{"_mirror", WallGhosts::Mirror}}) {
             const WallGhosts g = ghosts;
-            v.push_back({std::string("cantilever") + suffix, "|mean tip deflection - delta| / delta over 3 periods (delta = 1.4868e-2 m)",
+            v.push_back({std::string("cantilever") + suffix,
+                         "|mean tip deflection - delta| / delta over 3 periods (delta = 1.4868e-2 m)",
                          "< 3% at h/dx >= 8, period within 3%", 2, 2, 1, [g](const CaseConfig& c) { return cantilever(c, g); }});
-            v.push_back({std::string("hydrostatic") + suffix, "|p_floor / (rho0 g H0) - 1|", "< 1% at H0/dx >= 32, no tension", 1, 2, 1,
-                         [g](const CaseConfig& c) { return hydrostatic(c, g); }});
+            v.push_back({std::string("hydrostatic") + suffix, "|p_floor / (rho0 g H0) - 1|", "< 1% at H0/dx >= 32, no tension", 1,
+                         2, 1, [g](const CaseConfig& c) { return hydrostatic(c, g); }});
         }
         v.push_back({"dam_break", "relative RMS error of the front Z for 0.84 <= T <= 3.33 (Martin and Moyce 1952)", "< 10%", 0,
                      2, 1, damBreak});
