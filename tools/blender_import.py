@@ -4,7 +4,8 @@
         [--save scene.blend] [--summary summary.json]
 
 - the surfaces: the frame files <scene>_NNNN.vdb as one Volume sequence per surface grid, meshed at threshold 0
-  (the zero crossing of the signed distance) by a Volume to Mesh modifier, coloured per material;
+  (the zero crossing of the signed distance) by a Volume to Mesh modifier, in its sets' colour (`color`) or its
+  material's;
 - the particles: when the run wrote PLY frames ("output": {"ply": true}; Blender cannot read VDB points), one
   point-cloud mesh `mpm_particles` whose vertices are reloaded from <scene>_NNNN.ply at each frame change,
   carrying every point attribute of the file: `velocity` (vx, vy, vz), `id`, `material`, `set`, `pscale`, `Cd`
@@ -252,6 +253,11 @@ def main():
     if args.save:
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(args.save))
         print("blender_import: saved " + args.save)
+        if particles:
+            # Blender runs a .blend's scripts only when allowed; without them the particles stay at this frame.
+            print("blender_import: its particles animate only when Blender may run the file's scripts: open it with "
+                  "`blender -y %s`, or tick Preferences > Save & Load > Auto Run Python Scripts "
+                  "(the surfaces and colliders animate either way)" % args.save)
     print("blender_import: frames %d-%d, %d surfaces, %s, %d colliders from %s" % (
         first, last, len(surfaces), "particles from PLY" if particles else "no particles", len(colliders), args.directory))
 

@@ -5,11 +5,11 @@
 
 Imports the frame's .vdb as a Volume and meshes every surface grid in it (`surface`, or `surface_<material>`
 / `surface_<set>` with output.surface_group) with a Volume to Mesh modifier at threshold 0, the zero
-crossing of the signed distance, one colour per material. The colliders come from the run's `scene.json`
+crossing of the signed distance, in its sets' own colour (`color`) or else its material's. The colliders come from the run's `scene.json`
 (beside the frame; its `scene_file` locates the assets), placed where their motion has them at the frame's
 time: planes as a finite floor or wall, boxes, cylinders, spheres, meshes from their files (OBJ, PLY, STL)
 and VDB colliders from their level set (a `$F` sequence at the frame's file). Planes and containers
-(`"inside": true`) are drawn as cutaways: the side facing the camera is see-through, so a wall in front of
+(`"inside": true`) and colliders around the material (a glass, a bowl) are drawn as cutaways: the side facing the camera is see-through, so a wall in front of
 the material or a tank's near side never hides it. mpm writes Y-up (Houdini's convention); everything is
 placed under one object turned +90 degrees about X, so that Y becomes Blender's Z.
 
@@ -20,6 +20,7 @@ pass after the image and exits 1 when the material (or, where the scene has any,
 less than --min-coverage of it (the CTest tests labelled `blender`).
 """
 import argparse
+import colorsys
 import glob
 import json
 import math
@@ -39,6 +40,10 @@ COLLIDER_COLOUR = (0.42, 0.4, 0.38)
 # A collider's drawn extent is clipped to the material's bounds grown by this many times their size, so a
 # drum 1 m long around a 4 cm slab of sand does not shrink the material to a speck.
 COLLIDER_FRAMING_MARGIN = 0.5
+# --check-colours: a pixel counts towards a surface's colour when its saturation is at least SATURATED and its
+# hue within HUE_TOLERANCE (of the hue circle) of the colour's. Shaded under Filmic, the jelly balls' red and blue
+# keep their hues to about 0.02 (measured on jelly_bounce); grey walls and the sky stay under 0.25 saturation.
+SATURATED, HUE_TOLERANCE = 0.25, 0.06
 # Flat colours of the coverage pass.
 ID_MATERIAL, ID_COLLIDER = (0.0, 0.0, 1.0), (1.0, 0.0, 0.0)
 
@@ -58,12 +63,14 @@ def parse_args():
     p.add_argument("--engine", choices=["CYCLES", "BLENDER_EEVEE"], default="CYCLES")
     p.add_argument("--samples", type=int, default=32)
     p.add_argument("--resolution", default="960x540", help="WxH in pixels")
-    p.add_argument("--color", default="", help="one colour r,g,b in 0..1 for every surface (default: per material)")
+    p.add_argument("--color", default="", help="one colour r,g,b in 0..1 for every surface (default: the sets' colours, else per material)")
     p.add_argument("--floor", action="store_true",
                    help="add a grey floor under the material when the scene has no floor plane")
     p.add_argument("--check-not-empty", action="store_true",
                    help="exit 1 if the material or the colliders are missing from the image")
     p.add_argument("--min-coverage", type=float, default=0.01, help="least image fraction each must cover")
+    p.add_argument("--check-colours", action="store_true",
+                   help="exit 1 unless every set with a `color` shows in the image in its hue (with --check-not-empty)")
     return p.parse_args(argv)
 
 
@@ -91,7 +98,7 @@ class Scene:
     """The parts of the resolved scene the render needs."""
 
     def __init__(self, path):
-        self.colliders, self.fps, self.base, self.set_material = [], 24.0, "", {}
+        self.colliders, self.fps, self.base, self.set_material, self.set_colour = [], 24.0, "", {}, {}
         if not path or not os.path.isfile(path):
             return
         with open(path) as f:
@@ -99,6 +106,9 @@ class Scene:
         self.fps = float(s.get("simulation", {}).get("fps", 24.0))
         self.colliders = s.get("colliders", [])
         self.set_material = {st.get("name", ""): st.get("material", "") for st in s.get("sets", [])}
+        # A set's own colour (its points' Cd, linear RGB), where the scene gives one.
+        self.set_colour = {st.get("name", ""): tuple(float(c) for c in st["color"])
+                           for st in s.get("sets", []) if len(st.get("color", [])) == 3}
         source = s.get("scene_file", "")
         if source:
             self.base = os.path.dirname(source)
@@ -110,10 +120,23 @@ class Scene:
         return name if os.path.isabs(name) else os.path.join(self.base, name)
 
     def colour_of_grid(self, grid, index):
+        """The colour of a surface grid: its sets' own colour where they share one, else their material's."""
         key = grid[len("surface_"):] if grid.startswith("surface_") else ""
-        material = key if key in MATERIAL_COLOURS else self.set_material.get(key, "")
-        if grid == "surface" and len(set(self.set_material.values())) == 1:
-            material = next(iter(self.set_material.values()))
+        if key in self.set_material:
+            sets = [key]  # surface_group "set"
+        elif key:
+            sets = [n for n, m in self.set_material.items() if m == key]  # surface_group "material"
+        else:
+            sets = list(self.set_material)  # one surface for every set
+        own = {self.set_colour.get(n) for n in sets}
+        if len(own) == 1 and None not in own:
+            return own.pop()
+        if len(own - {None}) > 1:
+            print("render_blender: warning: grid '%s' is the surface of sets of different colours (%s); it is drawn "
+                  "in one colour. Write one surface per set with \"output\": {\"surface_group\": \"set\"}"
+                  % (grid, ", ".join(sorted(sets))))
+        materials = {self.set_material[n] for n in sets}
+        material = key if key in MATERIAL_COLOURS else (materials.pop() if len(materials) == 1 else "")
         return MATERIAL_COLOURS.get(material, PALETTE[index % len(PALETTE)])
 
 
@@ -174,6 +197,35 @@ def cutaway(mat, hide_front):
     links.new(second.outputs[0], mix.inputs[2])
     links.new(mix.outputs[0], out.inputs["Surface"])
     mat.blend_method = "HASHED"  # EEVEE honours the transparent side too
+
+
+def cut_towards(mat, centre, towards):
+    """Makes the part of the object on the camera's side of the plane through `centre` (normal `towards`, the
+    direction to the camera) see-through: a section of a glass or a bowl, whose near wall's inside faces would
+    hide its contents from a cutaway by facing alone."""
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    out = nodes.get("Material Output")
+    shader = out.inputs["Surface"].links[0].from_node
+    geometry = nodes.new("ShaderNodeNewGeometry")
+    offset = nodes.new("ShaderNodeVectorMath")
+    offset.operation = "SUBTRACT"
+    offset.inputs[1].default_value = centre
+    side = nodes.new("ShaderNodeVectorMath")
+    side.operation = "DOT_PRODUCT"
+    side.inputs[1].default_value = towards
+    near = nodes.new("ShaderNodeMath")
+    near.operation = "GREATER_THAN"
+    near.inputs[1].default_value = 0.0
+    clear = nodes.new("ShaderNodeBsdfTransparent")
+    mix = nodes.new("ShaderNodeMixShader")
+    links.new(geometry.outputs["Position"], offset.inputs[0])
+    links.new(offset.outputs["Vector"], side.inputs[0])
+    links.new(side.outputs["Value"], near.inputs[0])
+    links.new(near.outputs["Value"], mix.inputs["Fac"])
+    links.new(shader.outputs[0], mix.inputs[1])
+    links.new(clear.outputs[0], mix.inputs[2])
+    links.new(mix.outputs[0], out.inputs["Surface"])
+    mat.blend_method = "HASHED"
 
 
 def flatten(mat, rgb):
@@ -246,6 +298,7 @@ def import_surfaces(path, args, scene, root):
         mesh_obj, _ = level_set_mesh(path, grid, root, "mpm_" + grid)
         rgb = tuple(float(c) for c in args.color.split(",")) if args.color else scene.colour_of_grid(grid, i)
         mesh_obj.data.materials.append(principled("mpm_" + grid, rgb, 0.25))
+        print("render_blender: surface %s colour %s" % (grid, ",".join("%.3f" % c for c in rgb)))
         meshes.append(mesh_obj)
     return meshes
 
@@ -363,8 +416,15 @@ def collider_object(c, scene, frame, root):
     return None
 
 
-def add_colliders(scene, frame, root):
-    """Every bounded collider, posed at the frame's time. Returns (object, is_container) pairs."""
+def holds(bounds, point):
+    return bounds is not None and all(l <= c <= h for l, c, h in zip(bounds[0], point, bounds[1]))
+
+
+def add_colliders(scene, frame, root, material=None, towards=None):
+    """Every bounded collider, posed at the frame's time. A container (`"inside": true`) is drawn with its faces
+    towards the camera see-through; a collider around the material (its box holds the middle of `material`'s
+    bounds: a glass, a bowl) is cut by the plane through that middle facing the camera (`towards`), so that the
+    near side of neither hides what it holds."""
     t = frame / scene.fps
     out = []
     for i, c in enumerate(scene.colliders):
@@ -377,9 +437,12 @@ def add_colliders(scene, frame, root):
             adopt(obj, root)
         obj.matrix_basis = motion_matrix(c.get("motion"), t, scene.fps) @ rest
         mat = principled("collider_%d" % i, COLLIDER_COLOUR, 0.6)
+        middle = (material[0] + material[1]) / 2 if material else None
         if c.get("inside"):
             cutaway(mat, hide_front=True)
             obj.visible_shadow = False  # a closed container would leave its inside in the dark
+        elif middle is not None and towards is not None and holds(world_bounds([obj]), middle):
+            cut_towards(mat, middle, towards)
         obj.data.materials.clear()
         obj.data.materials.append(mat)
         out.append(obj)
@@ -488,6 +551,11 @@ def framing(files, frames, args, scene):
     return bounds
 
 
+def camera_direction(view):
+    """--view (Y-up, from the material to the camera) in Blender's Z-up axes, unit length."""
+    return Vector((view.x, -view.z, view.y)).normalized()
+
+
 def stage(lo, hi, floor, view):
     """Camera looking at the bounds along `view` (by default from the front-right and above), a sun and a sky
     colour."""
@@ -499,7 +567,7 @@ def stage(lo, hi, floor, view):
     bpy.context.scene.collection.objects.link(cam)
     # Distance so the bounding sphere fits the narrower field of view.
     fov = min(cam_data.angle_x, cam_data.angle_y) if hasattr(cam_data, "angle_y") else cam_data.angle
-    direction = Vector((view.x, -view.z, view.y)).normalized()  # Y-up to Blender's Z-up
+    direction = camera_direction(view)
     cam.location = centre + direction * (radius / math.sin(fov / 2) * 1.05)
     cam.rotation_euler = (centre - cam.location).to_track_quat("-Z", "Y").to_euler()
     cam_data.clip_end = max(1000.0, 10 * radius)
@@ -530,6 +598,8 @@ def render(path, args, samples):
         scene.cycles.samples = samples
         scene.cycles.device = "CPU"
         scene.cycles.use_denoising = False  # Debian's Blender is built without OpenImageDenoise
+    else:
+        scene.eevee.taa_render_samples = samples
     w, h = (int(v) for v in args.resolution.lower().split("x"))
     scene.render.resolution_x, scene.render.resolution_y = w, h
     scene.render.resolution_percentage = 100
@@ -548,6 +618,38 @@ def coverage(path):
     red = sum(1 for i in range(0, len(px), 4) if px[i] > 0.5 and px[i + 1] < 0.25 and px[i + 2] < 0.25)
     bpy.data.images.remove(img)
     return blue / n, red / n
+
+
+def hue_coverage(path, colours):
+    """For each colour (linear RGB), the fraction of the image's saturated pixels within HUE_TOLERANCE of its
+    hue. Hue survives the view transform and shading far better than the colour itself."""
+    img = bpy.data.images.load(os.path.abspath(path))
+    px = img.pixels[:]
+    n = len(px) // 4
+    wanted = [colorsys.rgb_to_hsv(*c)[0] for c in colours]
+    counts = [0] * len(colours)
+    for i in range(0, len(px), 4):
+        h, s, _ = colorsys.rgb_to_hsv(px[i], px[i + 1], px[i + 2])
+        if s < SATURATED:
+            continue
+        for k, w in enumerate(wanted):
+            if min(abs(h - w), 1.0 - abs(h - w)) < HUE_TOLERANCE:
+                counts[k] += 1
+    bpy.data.images.remove(img)
+    return [c / n for c in counts]
+
+
+def check_colours(out, args, scene):
+    """Checks that every set the scene gives a colour shows in the rendered image in that colour's hue."""
+    names = sorted(scene.set_colour)
+    if not names:
+        fail("--check-colours: the scene gives no set a colour")
+    shares = hue_coverage(out, [scene.set_colour[n] for n in names])
+    least = args.min_coverage / (2 * len(names))  # the sets share the material's coverage
+    for name, share in zip(names, shares):
+        print("render_blender: set %s in its colour's hue covers %.2f%% of %s" % (name, 100 * share, out))
+        if share < least:
+            fail("set %s's colour covers %.2f%% of the image, less than %.2f%%" % (name, 100 * share, 100 * least))
 
 
 def check_coverage(out, args, surfaces, colliders):
@@ -576,14 +678,16 @@ def render_one(vdb, frame, out, args, scene, bounds):
     clear_scene()
     root = world_root()
     surfaces = import_surfaces(vdb, args, scene, root)
-    colliders = [] if args.no_colliders else add_colliders(scene, frame, root)
+    view = vec([float(c) for c in args.view.split(",")])
+    colliders = [] if args.no_colliders else add_colliders(scene, frame, root, world_bounds(surfaces), camera_direction(view))
     if not args.no_colliders:
         colliders += add_planes(scene, frame, root, *bounds)
-    view = vec([float(c) for c in args.view.split(",")])
     stage(*bounds, args.floor and (args.no_colliders or not has_floor(scene)), view)
     render(out, args, args.samples)
     print("render_blender: wrote " + out)
     if args.check_not_empty:
+        if args.check_colours:
+            check_colours(out, args, scene)
         check_coverage(out, args, surfaces, colliders)
 
 
