@@ -25,7 +25,7 @@ inline double colliderReach(double dx) {
 
 enum class Boundary {
     Sticky,    ///< node velocity becomes the collider's
-    Slip,      ///< the normal component is removed, in both directions
+    Slip,      ///< the normal component is removed, in both directions (only inwards on a wall with friction)
     Separate,  ///< the normal component is removed only while the node moves into the object
 };
 
@@ -37,8 +37,8 @@ const char* boundaryName(Boundary b);
 /// pressed node's v_t shrinks by the factor that makes the patch's friction impulse mu N. Node by node (a patch
 /// of one) the law misfires on a grid: the kernel spreads one traction over nodes at several depths, and the
 /// shares of tangential and normal impulse differ node by node (a staircase of nodes under a tilted wall, the
-/// little mass of nodes deep in it), so that static contact creeps; and in `slip` the tensile impulses that hold
-/// nodes on the wall must offset compressive ones, or friction brakes more than mu times the load.
+/// little mass of nodes deep in it), so that static contact creeps. Only pressed nodes enter: a wall with friction
+/// lets a node moving away go in every mode (RigidCollider::applyToLeaf).
 class FrictionPatches {
 public:
     /// A patch is the whole leaf: measured on the friction cases of the validation report, leaf patches pass 13

@@ -124,8 +124,10 @@ public:
             } else {
                 const Vec3f rel = v - vc;
                 const float vn = rel.dot(nWorld);
-                // Leaving the object: `separate` lets the node go; `slip` holds it on the surface, without friction.
-                if (vn >= 0.0f && boundary() == Boundary::Separate) return;
+                // Leaving the object: `separate` lets the node go, and so does a wall with friction in every mode;
+                // a frictionless `slip` wall holds it on the surface. Held in tension under friction, the back of a
+                // body sliding on a slip floor pitched it ever harder onto its front (docs/method.md, Friction).
+                if (vn >= 0.0f && (boundary() == Boundary::Separate || friction() > 0.0f)) return;
                 const Vec3f vt = rel - vn * nWorld;
                 v = vc + vt;
                 patches.addNormal(n, m, vn);

@@ -279,10 +279,16 @@ template <class V>
 void colliderKeys(V& v, ColliderDesc& c) {
     v.choice(Key{.name = "boundary",
                  .help = "separate: remove the normal velocity only when moving in (material leaves a wall it is not pressed "
-                         "against); slip: remove it both ways (holds material on the wall, in tension too); sticky: stop",
+                         "against); slip: remove it both ways (holds material on the wall, in tension too; with friction it lets "
+                         "material leave as separate does); sticky: stop",
                  .noun = "boundary"},
              c.boundary, std::span<const Named<Boundary>>(kBoundaries));
-    v.number(Key{.name = "friction", .help = "Coulomb coefficient (slip and separate)", .lo = 0.0, .hi = 100.0}, c.friction);
+    v.number(
+        Key{.name = "friction",
+            .help = "Coulomb coefficient (slip and separate; a wall with friction acts only where the material presses on it)",
+            .lo = 0.0,
+            .hi = 100.0},
+        c.friction);
     v.flag(Key{.name = "inside", .help = "keep material inside it (a tank, a glass, a drum) instead of outside"}, c.inside);
     v.object(Key{.name = "motion", .help = "how it moves (none: static)"}, [&](auto& m) { motionKeys(m, c.motion); });
 }

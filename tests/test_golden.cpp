@@ -67,7 +67,7 @@ const GoldenScene kScenes[] = {
       "sets": [ { "material": "water", "shape": { "type": "box", "min": [0, 0, 0], "max": [0.3, 0.5, 0.3] }, "seed": 3 } ],
       "colliders": [ { "type": "plane", "boundary": "slip", "friction": 0.3 },
                      { "type": "plane", "point": [0, 0, 0], "normal": [1, 0, 0], "boundary": "separate" } ] })",
-     1, 20, 0xfeaae1a08c475515ull},
+     1, 20, 0xc3f66069980c0740ull},
     {"jelly_cubic_sphere", R"({
       "simulation": { "dx": 0.05, "substeps": 5, "interpolation": "cubic" },
       "sets": [ { "material": "jelly", "shape": { "type": "box", "min": [-0.15, 0.3, -0.15], "max": [0.15, 0.6, 0.15] },
