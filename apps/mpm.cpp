@@ -59,6 +59,8 @@ void installStopHandlers() {
     sigaction(SIGUSR1, &sa, nullptr);
 }
 
+const char* signalName(int sig) { return sig == SIGTERM ? "SIGTERM" : sig == SIGUSR1 ? "SIGUSR1" : "SIGINT"; }
+
 RunOptions parseFrames(const std::string& text, RunOptions o) {
     if (text.empty()) return o;
     const auto colon = text.find(':');
@@ -127,7 +129,25 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
     const int nThreads = threads > 0 ? threads : peek.threads > 0 ? peek.threads : int(std::thread::hardware_concurrency());
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nThreads));
     installStopHandlers();
-    SceneRun job(scenePath, options, events);
+    events.stop = &gStopSignal;
+    // Set-up (sampling millions of particles can take a while) says what it does and heeds Ctrl-C at once.
+    const auto setupStart = std::chrono::steady_clock::now();
+    std::unique_ptr<SceneRun> made;
+    try {
+        made = std::make_unique<SceneRun>(scenePath, options, events);
+    } catch (const SetupInterrupted& e) {
+        const int sig = gStopSignal.load();
+        if (speaks)
+            std::fprintf(stderr,
+                         "mpm: stopped by %s during the set-up (%s); nothing was simulated, written or removed: run the "
+                         "scene again to start it\n",
+                         signalName(sig), e.phase.c_str());
+        return kExitSignalBase + (sig ? sig : SIGINT);
+    }
+    SceneRun& job = *made;
+    const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count();
+    constexpr double kSlowSetup = 1.0;  // [s] a set-up worth a line of its own
+    if (!quiet && setupSeconds > kSlowSetup) std::fprintf(stderr, "mpm: set up in %.1f s\n", setupSeconds);
     progress.firstFrame = job.startFrame();
     if (job.startFrame() >= job.lastFrame()) {
         // A resumed run that had finished: its checkpoint is of the last frame.
@@ -157,12 +177,8 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
             std::fprintf(
                 stderr,
                 "%smpm: stopped by %s %s frame %d (t = %g s); the state is in %s\nmpm: resume with: mpm run %s -o %s --resume\n",
-                progress.tty ? "\n" : "",
-                sig == SIGTERM   ? "SIGTERM"
-                : sig == SIGUSR1 ? "SIGUSR1"
-                                 : "SIGINT",
-                inside ? "inside" : "after", at.frame + (inside ? 1 : 0), at.time, job.lastCheckpoint().c_str(),
-                scenePath.c_str(), job.directory().c_str());
+                progress.tty ? "\n" : "", signalName(sig), inside ? "inside" : "after", at.frame + (inside ? 1 : 0), at.time,
+                job.lastCheckpoint().c_str(), scenePath.c_str(), job.directory().c_str());
         return kExitSignalBase + (sig ? sig : SIGINT);
     }
     if (progress.tty) std::fprintf(stderr, "\n");

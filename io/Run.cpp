@@ -149,7 +149,19 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
         removeStaleTemporaries();
     });
     DerivedValues derived;
-    guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_, Comm::world(), &derived); });
+    std::string phase = "reading the scene";
+    SetupWatch watch;
+    watch.note = [&](const std::string& what) {
+        phase = what;
+        events_.note(what);
+    };
+    if (!comm.distributed()) watch.stop = events_.stop;
+    try {
+        guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_, Comm::world(), &derived, watch); });
+        if (watch.stop && watch.stop->load() != 0) throw Interrupted();
+    } catch (const Interrupted&) {
+        throw SetupInterrupted(phase);
+    }
     for (const std::string& w : derived.warnings) events_.warning(w);
     // From here the scene is the one that runs: every default stated, the pivots the builder derived included.
     scene_.resolvedJson = resolvedWithDerived(scene_, derived);
@@ -160,9 +172,11 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     layout_ = speciesLayout(scene_);
     identity_ = sceneIdentity(scene_.resolvedJson);
     hash_ = sceneHash(identity_);
-    guarded(options_.resume || options_.framesGiven ? "reading a checkpoint or emitting the sets due at the start"
-                                                    : "emitting the sets due at the start",
-            [&] { chooseStart(); });
+    const std::string starting = options_.resume || options_.framesGiven
+                                     ? "reading a checkpoint or emitting the sets due at the start"
+                                     : "emitting the sets due at the start";
+    events_.note(starting + " (" + std::to_string(heldSamples_) + " particles sampled)");
+    guarded(starting, [&] { chooseStart(); });
     onRoot(comm, [&] {
         // Part of a scene (--frames A:B): the rows of the other frames stay as the earlier runs wrote them.
         std::map<int, std::string> kept;

@@ -11,6 +11,7 @@
 #include <memory>
 #include <string>
 
+#include "core/Stability.h"  // Interrupted
 #include "io/Checkpoint.h"
 #include "io/DirectoryLock.h"
 #include "io/Output.h"
@@ -34,6 +35,17 @@ struct RunEvents {
     std::function<void(const std::string&)> warning = [](const std::string&) {};
     /// After each frame: the frame, the last frame, its stats and the seconds its files took to write.
     std::function<void(int, int, const FrameStats&, double)> frameDone = [](int, int, const FrameStats&, double) {};
+    /// A stop request (the signal flag) heeded during the set-up too: set while the sets are sampled, it ends the
+    /// constructor with SetupInterrupted before any old output is touched. On ranks the set-up runs to its end
+    /// (a rank that gave up alone would leave the others waiting), and the run stops at its first substep.
+    const std::atomic<int>* stop = nullptr;
+};
+
+/// A stop asked for during the set-up: nothing was simulated, written or removed; `phase` says what was under way.
+class SetupInterrupted : public Interrupted {
+public:
+    explicit SetupInterrupted(std::string phase) : phase(std::move(phase)) {}
+    std::string phase;
 };
 
 class SceneRun {

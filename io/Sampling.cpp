@@ -11,9 +11,14 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/Stability.h"  // Interrupted
 #include "sparse/LeafGeometry.h"
 
 namespace mpm {
+
+void SamplePart::checkStop() const {
+    if (stop && stop->load(std::memory_order_relaxed) != 0) throw Interrupted();
+}
 
 namespace {
 /// A lattice of the given spacing over the shape's bounds, each point jittered, those inside kept; of a
@@ -27,7 +32,7 @@ std::vector<Vec3d> jitteredGrid(const Shape& shape, double spacing, double jitte
     auto eachInside = [&](auto&& f) {
         std::mt19937 rng(seed);
         std::uniform_real_distribution<double> jitter(-jitterFraction * spacing, jitterFraction * spacing);
-        for (int i = 0; i < n[0]; ++i)
+        for (int i = 0; i < n[0]; ++i, part.checkStop())
             for (int j = 0; j < n[1]; ++j)
                 for (int k = 0; k < n[2]; ++k) {
                     const Vec3d x =
@@ -65,7 +70,8 @@ std::vector<Vec3d> jitteredGrid(const Shape& shape, double spacing, double jitte
 template <class Shape>
 class PoissonTilesIn {
 public:
-    PoissonTilesIn(const Shape& shape, double r, unsigned seed) : shape_(shape), r_(r), cell_(r / std::sqrt(3.0)), seed_(seed) {
+    PoissonTilesIn(const Shape& shape, double r, unsigned seed, const SamplePart& stop = {})
+        : shape_(shape), r_(r), cell_(r / std::sqrt(3.0)), seed_(seed), stop_(stop) {
         shape.bounds(lo_, hi_);
         const Vec3d span = ((hi_ - lo_) / (cell_ * kTileCells)).array().ceil().max(1.0);
         if (span.maxCoeff() > double(kMaxTiles))
@@ -113,7 +119,7 @@ public:
             const std::vector<Vec3i>& phase = fill[std::size_t(p)];
             for (const Vec3i& t : phase) done_[key(t)];
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, phase.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-                for (std::size_t i = r.begin(); i < r.end(); ++i) fillTile(phase[i]);
+                for (std::size_t i = r.begin(); i < r.end(); ++i) stop_.checkStop(), fillTile(phase[i]);
             });
         }
         // The halo's tiles go first, and each wanted tile's points are released once copied: the peak stays
@@ -290,6 +296,7 @@ private:
     const Shape& shape_;
     double r_, cell_;
     unsigned seed_;
+    SamplePart stop_;  ///< its stop request alone
     Vec3d lo_, hi_;
     Vec3i tiles_;
     std::vector<Vec3i> reachR_, reachSeed_, reachPiece_;  ///< offsetsWithin r, and the seeds' spacings
@@ -310,7 +317,7 @@ inline std::vector<Vec3i> tilesInOrder(const Vec3i& n) {
 /// Tiles [part / parts, (part + 1) / parts) of the shape's tiles in Morton order: the part's share.
 template <class Shape>
 std::vector<Vec3d> poissonDiskIn(const Shape& shape, double r, unsigned seed, SamplePart part) {
-    PoissonTilesIn<Shape> tiles(shape, r, seed);
+    PoissonTilesIn<Shape> tiles(shape, r, seed, part);
     std::vector<Vec3i> order = tilesInOrder(tiles.tileCounts());
     if (part.parts > 1) {
         const auto [begin, end] = part.range(order.size());
@@ -335,15 +342,17 @@ std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCe
         const double jitter = method == Sampling::Grid ? kGridJitter : 0.0;
         double spacing = std::cbrt(1.0 / perVolume);
         if (count <= 0) return jitteredGrid(shape, spacing, jitter, seed, part);
-        pts = jitteredGrid(shape, spacing, jitter, seed);
+        const SamplePart whole{0, 1, part.stop};
+        pts = jitteredGrid(shape, spacing, jitter, seed, whole);
         // A sphere may hold slightly fewer lattice points than asked: refine until there are enough.
-        while (count > 0 && (long long)pts.size() < count) pts = jitteredGrid(shape, spacing *= 0.97, jitter, seed);
+        while (count > 0 && (long long)pts.size() < count) pts = jitteredGrid(shape, spacing *= 0.97, jitter, seed, whole);
     } else {
         double r = std::cbrt(1.0 / (kPoissonPacking * perVolume));
         // A set given by its density samples its part alone; an exact count picks from the whole.
         if (count <= 0) return poissonDiskIn(shape, r, seed, part);
-        pts = poissonDiskIn(shape, r, seed, SamplePart{});
-        while ((long long)pts.size() < count) pts = poissonDiskIn(shape, r *= 0.95, seed, SamplePart{});
+        const SamplePart whole{0, 1, part.stop};
+        pts = poissonDiskIn(shape, r, seed, whole);
+        while ((long long)pts.size() < count) pts = poissonDiskIn(shape, r *= 0.95, seed, whole);
     }
     if (count > 0 && (long long)pts.size() > count) {
         std::mt19937 rng(seed ^ 0x9e3779b9u);

@@ -1,6 +1,7 @@
 #pragma once
 // Initial particle positions inside a shape: Poisson-disk sampling (Bridson 2007, "Fast Poisson disk
 // sampling in arbitrary dimensions"), as the thesis did, or a jittered lattice.
+#include <atomic>
 #include <cstddef>
 #include <memory>
 #include <utility>
@@ -44,6 +45,10 @@ inline constexpr int kPoissonAttempts = 30;
 /// in order, are the whole sampling in its order.
 struct SamplePart {
     int part = 0, parts = 1;
+    /// A stop request (mpm run's signal flag): while it is nonzero the sampling gives up, throwing Interrupted,
+    /// within a few milliseconds, so that Ctrl-C ends the set-up of a scene of millions of particles at once.
+    const std::atomic<int>* stop = nullptr;
+    void checkStop() const;
     /// The part's items [first, second) of n in order: the part-th of `parts` nearly equal ranges.
     std::pair<std::size_t, std::size_t> range(std::size_t n) const {
         const auto cut = [&](int k) { return std::size_t((unsigned long long)n * (unsigned long long)k / (unsigned long long)parts); };

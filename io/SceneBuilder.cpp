@@ -8,6 +8,7 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 #include "core/Colliders.h"
 #include "core/ExactSum.h"
@@ -314,7 +315,7 @@ SetSamples pointCloudSet(const SceneDesc& scene, std::size_t i, const PointsShap
 }  // namespace
 
 /// The set's shape sampled: positions, a point cloud's velocities, the volume.
-static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i, SamplePart part) {
+static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i, const SamplePart& part) {
     const ParticleSetDesc& d = scene.sets[i];
     if (const auto* points = std::get_if<PointsShape>(&d.shape)) {
         // A file is read whole; each part keeps its range of points.
@@ -379,8 +380,8 @@ static void addInitialVelocities(const SceneDesc& scene, std::size_t i, SetSampl
     }
 }
 
-SetSamples sampleSet(const SceneDesc& scene, std::size_t i, const Comm& comm) {
-    SetSamples out = sampleSetShape(scene, i, SamplePart{comm.rank(), comm.size()});
+SetSamples sampleSet(const SceneDesc& scene, std::size_t i, const Comm& comm, const std::atomic<int>* stop) {
+    SetSamples out = sampleSetShape(scene, i, SamplePart{comm.rank(), comm.size(), stop});
     addInitialVelocities(scene, i, out, comm);
     return out;
 }
@@ -638,7 +639,9 @@ SpeciesLayout speciesLayout(const SceneDesc& scene) {
     return out;
 }
 
-std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm, DerivedValues* derived) {
+std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm, DerivedValues* derived,
+                                            const SetupWatch& watch) {
+    const SamplePart asked{0, 1, watch.stop};
     auto sim = std::make_unique<Simulation>(scene.settings);
     DerivedValues found;
     found.setPivot.resize(scene.sets.size());
@@ -646,8 +649,16 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
     // The colliders first: the sets' samples are checked against them.
     std::vector<std::unique_ptr<Collider>> colliders;
     found.colliderVoxel.assign(scene.colliders.size(), 0.0);
-    for (std::size_t i = 0; i < scene.colliders.size(); ++i)
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i) {
+        asked.checkStop();
+        std::visit(
+            [&]<class S>(const S& s) {
+                if constexpr (std::is_same_v<S, MeshShape> || std::is_same_v<S, VdbShape>)
+                    watch.note("building the distance field of collider " + std::to_string(i) + " (" + s.file + ")");
+            },
+            scene.colliders[i].shape);
         colliders.push_back(colliderOf(scene, i, &found.colliderPivot[i], &found.warnings, &found.colliderVoxel[i]));
+    }
     const SpeciesLayout layout = speciesLayout(scene);
     // Bodies, numbered in order of first appearance: a set's `body` name, or else its own name.
     std::vector<int> bodyOf;
@@ -684,7 +695,9 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
             sim->addEmitter(std::move(e));
             continue;
         }
-        SetSamples samples = sampleSet(scene, i, comm);
+        asked.checkStop();
+        watch.note("sampling set " + std::to_string(i) + " '" + d.name + "'");
+        SetSamples samples = sampleSet(scene, i, comm, watch.stop);
         found.setPivot[i] = samples.pivot;
         e.positions = std::move(samples.positions);
         long long total = (long long)e.positions.size();

@@ -1,6 +1,8 @@
 #pragma once
 // From a scene description to a ready-to-run Simulation: one species per particle set (its material with
 // the set's Lame scales), the set sampled in its shape as an emitter, and the colliders.
+#include <atomic>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -36,7 +38,9 @@ struct SetSamples {
 /// With several ranks each gets its part of the samples (in rank order, the whole set's order; `volume`
 /// stays the whole set's): a Poisson-disk set given by its density samples only its part's tiles.
 /// Collective on `comm`.
-SetSamples sampleSet(const SceneDesc& scene, std::size_t i, const Comm& comm = Comm::single());
+/// A nonzero *stop gives up the sampling (Interrupted) within milliseconds.
+SetSamples sampleSet(const SceneDesc& scene, std::size_t i, const Comm& comm = Comm::single(),
+                     const std::atomic<int>* stop = nullptr);
 
 /// A continuous set's stream: the layers that enter through its disc (throws SceneError for a set that cannot
 /// be one: not a disc, no velocity out through it).
@@ -68,7 +72,16 @@ struct DerivedValues {
 /// Builds the simulation the scene describes. Throws SceneError when a set's shape holds no particle. On
 /// several ranks each emitter holds its rank's part of the set's samples (Simulation::distribute then cuts
 /// the leaves from every rank's counts); collective on `comm`. `derived`, if given, receives what it derived.
-std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm = Comm::single(), DerivedValues* derived = nullptr);
+/// What building a simulation says and heeds as it goes (mpm run): a note as each file collider's distance field
+/// and each set's sampling starts, and a stop request (the run's signal flag), looked at between them and while a
+/// set is sampled, that gives the building up with Interrupted: Ctrl-C during the set-up of millions of particles
+/// acts at once, and nothing has been simulated or written yet.
+struct SetupWatch {
+    std::function<void(const std::string&)> note = [](const std::string&) {};
+    const std::atomic<int>* stop = nullptr;
+};
+std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm = Comm::single(),
+                                            DerivedValues* derived = nullptr, const SetupWatch& watch = {});
 
 /// What buildSimulation would derive, without building it: the colliders are made and the spinning sets sampled.
 DerivedValues deriveValues(const SceneDesc& scene);
