@@ -49,7 +49,11 @@ struct KernelScene {
         withKernel(kernel, [&]<class K>() { grid.configure(kDx, K::kBaseShift, K::kWidth); });
         destination.resize(species.size());
         for (std::size_t s = 0; s < species.size(); ++s)
-            std::visit([&](auto& sp) { requests.push_back(BinRequest{&sp.p.x, &sp.p.id, &destination[s], &sp.leafStart}); }, species[s]);
+            std::visit(
+                [&](auto& sp) {
+                    requests.push_back(BinRequest{&sp.p.x, &sp.p.id, &destination[s], &sp.leafStart});
+                },
+                species[s]);
         grid.rebuild(requests);
         colliders.push_back(planeCollider(Vec3d::Zero(), Vec3d::UnitY(), Boundary::Slip, 0.0f));
         particlesToGrid(grid, species, transfer, dt);
@@ -90,7 +94,8 @@ BENCHMARK(BM_Binning)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_GridUpdate(benchmark::State& st) {
     KernelScene& s = scene("water");
-    for (auto _ : st) benchmark::DoNotOptimize(updateGridVelocities(s.grid, s.colliders, Vec3f(0, -9.81f, 0), s.dt, 0.0, SurfaceContact{}));
+    for (auto _ : st)
+        benchmark::DoNotOptimize(updateGridVelocities(s.grid, s.colliders, Vec3f(0, -9.81f, 0), s.dt, 0.0, SurfaceContact{}));
     perParticle(st, s.particles());
 }
 BENCHMARK(BM_GridUpdate)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -76,17 +76,17 @@ private:
 /// Where a `separate` wall acts (simulation.wall_contact). With "stencil", on every node inside the collider that
 /// has mass, so the wall reaches material up to the stencil's half width (1.5 cells for the quadratic kernel)
 /// before its surface arrives. With "surface" (the default), a node inside the collider acts only once the
-/// material has reached the collider's surface there: a node of mass m is covered to the share f = m / (rho dx^3) of its support, which a
-/// flat material surface s cells beyond the node gives when f = F(s) (F the kernel's covered fraction); the
-/// material touches the wall at the node when s + phi / dx <= 0.
+/// material has reached the collider's surface there: a node of mass m is covered to the share f = m / (rho dx^3) of its support,
+/// which a flat material surface s cells beyond the node gives when f = F(s) (F the kernel's covered fraction); the material
+/// touches the wall at the node when s + phi / dx <= 0.
 ///
 /// rho is the rest density of the material at the node: one value when every body has the same, else that of the
 /// particles binned in the node's leaf (their stencils' base nodes in it), so that a body of another density
 /// elsewhere changes nothing (docs/method.md, section 7).
 struct SurfaceContact {
-    float cellMass = 0.0f;                 ///< rest density times dx^3; 0: the wall acts wherever the stencil reaches
-    const float* leafCellMass = nullptr;   ///< per leaf of the field, where its bodies' densities differ
-    double (*covered)(double) = nullptr;   ///< the kernel's covered fraction F(s), decreasing from 1 to 0
+    float cellMass = 0.0f;                ///< rest density times dx^3; 0: the wall acts wherever the stencil reaches
+    const float* leafCellMass = nullptr;  ///< per leaf of the field, where its bodies' densities differ
+    double (*covered)(double) = nullptr;  ///< the kernel's covered fraction F(s), decreasing from 1 to 0
     /// The contact test for the nodes of leaf l.
     SurfaceContact ofLeaf(std::size_t l) const {
         SurfaceContact s = *this;
@@ -130,8 +130,8 @@ public:
     virtual std::unique_ptr<ColliderContext> makeContext() const { return nullptr; }
     /// Applies the boundary condition at time t to every node in `box` of a leaf with phi <= 0 and nonzero mass
     /// (for a `separate` wall, only where `surface` says the material has reached it), with Coulomb friction per
-    /// contact patch (FrictionPatches). A leaf whose centre lies farther from the surface than its half diagonal is skipped (phi is 1-Lipschitz).
-    /// Returns the work a moving collider did on the nodes (its impulse times its velocity).
+    /// contact patch (FrictionPatches). A leaf whose centre lies farther from the surface than its half diagonal is skipped (phi
+    /// is 1-Lipschitz). Returns the work a moving collider did on the nodes (its impulse times its velocity).
     virtual double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
                                const SurfaceContact& surface) const = 0;
 
@@ -146,8 +146,8 @@ public:
     };
     /// Appends a leaf's wall nodes at time t within `reach` [m] of the surface on either side (none for a leaf far
     /// from it).
-    virtual void wallNodesOfLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, double reach, ColliderContext* context,
-                                 std::vector<WallNode>& out) const = 0;
+    virtual void wallNodesOfLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, double reach,
+                                 ColliderContext* context, std::vector<WallNode>& out) const = 0;
 
     /// What the particle pass did to one leaf's particles.
     struct ProjectionResult {
@@ -159,8 +159,9 @@ public:
     /// thinner than this step's travel, on the way through it) are moved back to its surface along the normal,
     /// and their velocity gets the boundary condition. This keeps material out of walls thinner than a cell,
     /// which conditions on grid nodes alone let it through.
-    virtual ProjectionResult projectParticles(ParticleArrays& particles, uint32_t begin, uint32_t end, const Vec3i& leafOrigin, double dx,
-                                              double t, float dt, const Vec3d& gravity, ColliderContext* context) const = 0;
+    virtual ProjectionResult projectParticles(ParticleArrays& particles, uint32_t begin, uint32_t end, const Vec3i& leafOrigin,
+                                              double dx, double t, float dt, const Vec3d& gravity,
+                                              ColliderContext* context) const = 0;
 
     Boundary boundary() const { return boundary_; }
     float friction() const { return friction_; }

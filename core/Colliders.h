@@ -10,8 +10,10 @@ namespace mpm {
 
 /// A collider of an analytic shape.
 template <class S>
-std::unique_ptr<Collider> analyticCollider(const S& shape, Boundary b, float friction, Motion motion = Motion(), bool inside = false) {
-    return std::make_unique<RigidCollider<AnalyticGeometry<S>>>(AnalyticGeometry<S>{shape}, b, friction, std::move(motion), inside);
+std::unique_ptr<Collider> analyticCollider(const S& shape, Boundary b, float friction, Motion motion = Motion(),
+                                           bool inside = false) {
+    return std::make_unique<RigidCollider<AnalyticGeometry<S>>>(AnalyticGeometry<S>{shape}, b, friction, std::move(motion),
+                                                                inside);
 }
 
 inline std::unique_ptr<Collider> planeCollider(const Vec3d& point, const Vec3d& normal, Boundary b, float friction) {

@@ -181,14 +181,16 @@ std::vector<Bytes> Comm::exchange(const std::vector<Bytes>& out) const {
         in[r].resize(recvSize[r]);
         for (unsigned long long at = 0; at < recvSize[r]; at += kPiece) {
             requests.emplace_back();
-            MPI_Irecv(in[r].data() + at, int(std::min(kPiece, recvSize[r] - at)), MPI_BYTE, r, 3, MPI_COMM_WORLD, &requests.back());
+            MPI_Irecv(in[r].data() + at, int(std::min(kPiece, recvSize[r] - at)), MPI_BYTE, r, 3, MPI_COMM_WORLD,
+                      &requests.back());
         }
     }
     for (int r = 0; r < size_; ++r) {
         if (r == rank_) continue;
         for (unsigned long long at = 0; at < sendSize[r]; at += kPiece) {
             requests.emplace_back();
-            MPI_Isend(out[r].data() + at, int(std::min(kPiece, sendSize[r] - at)), MPI_BYTE, r, 3, MPI_COMM_WORLD, &requests.back());
+            MPI_Isend(out[r].data() + at, int(std::min(kPiece, sendSize[r] - at)), MPI_BYTE, r, 3, MPI_COMM_WORLD,
+                      &requests.back());
         }
         bytesSent_ += sendSize[r];
     }

@@ -17,8 +17,8 @@ std::vector<std::unique_ptr<ColliderContext>> contextsFor(const std::vector<std:
 }
 }  // namespace
 
-GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& g,
-                                      float dt, double tEnd, const SurfaceContact& surface, bool toVelocity,
+GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders,
+                                      const Vec3f& g, float dt, double tEnd, const SurfaceContact& surface, bool toVelocity,
                                       const std::vector<uint8_t>* owned) {
     return reduceLeafRanges(
         grid.leafCount(), LeafGrain::Nodes, GridUpdateResult{},
@@ -34,14 +34,17 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
                     box.forEach([&](int n) {
                         Eigen::Map<Vec3f> v(leaf.momentum + 3 * n);
                         const float m = leaf.mass[n];
-                        if (m != 0.0f) v = v / m + dt * g;
-                        else v.setZero();
+                        if (m != 0.0f)
+                            v = v / m + dt * g;
+                        else
+                            v.setZero();
                     });
                 const SurfaceContact leafSurface = surface.ofLeaf(l);
                 for (std::size_t c = 0; c < colliders.size(); ++c)
                     acc.work += colliders[c]->applyToLeaf(leaf, box, grid.dx(), tEnd, contexts[c].get(), leafSurface);
                 box.forEach([&](int n) {
-                    if (leaf.mass[n] != 0.0f) acc.maxSpeed = std::max(acc.maxSpeed, Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm());
+                    if (leaf.mass[n] != 0.0f)
+                        acc.maxSpeed = std::max(acc.maxSpeed, Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm());
                 });
             }
         },
@@ -72,7 +75,8 @@ bool mirrors(const Collider& c) {
 class ImageReader {
 public:
     /// The images of the ghosts (`inside`) or of the nodes in front.
-    ImageReader(const SparseGrid& grid, const MirrorWalls& walls, bool inside, const RemoteNodes* remote) : lookup_(grid), remote_(remote) {
+    ImageReader(const SparseGrid& grid, const MirrorWalls& walls, bool inside, const RemoteNodes* remote)
+        : lookup_(grid), remote_(remote) {
         if (!remote) return;
         for (const auto& leafWalls : walls)
             for (const MirrorWallNode& w : leafWalls)
@@ -105,7 +109,9 @@ private:
 
 /// A vector's image across a wall of normal n: odd for `sticky` (the image moves against it), odd in the normal
 /// part alone for `slip`.
-Vec3f reflect(const Vec3f& a, const Vec3f& n, Boundary b) { return b == Boundary::Sticky ? Vec3f(-a) : Vec3f(a - 2.0f * a.dot(n) * n); }
+Vec3f reflect(const Vec3f& a, const Vec3f& n, Boundary b) {
+    return b == Boundary::Sticky ? Vec3f(-a) : Vec3f(a - 2.0f * a.dot(n) * n);
+}
 }  // namespace
 
 MirrorWalls findMirrorWalls(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd,
@@ -131,7 +137,8 @@ MirrorWalls findMirrorWalls(const SparseGrid& grid, const std::vector<std::uniqu
     return walls;
 }
 
-std::size_t foldWallImages(const SparseGrid& grid, const MirrorWalls& walls, const Vec3f& gravity, float dt, const RemoteNodes* remote) {
+std::size_t foldWallImages(const SparseGrid& grid, const MirrorWalls& walls, const Vec3f& gravity, float dt,
+                           const RemoteNodes* remote) {
     const ImageReader reader(grid, walls, false, remote);
     // Read every image first, then add: a node in front of one wall may be another's image.
     struct Add {
@@ -198,7 +205,8 @@ std::size_t mirrorGhostNodes(const SparseGrid& grid, const MirrorWalls& walls, f
 }
 
 ProjectionSummary projectOutOfColliders(const SparseGrid& grid, std::vector<AnySpecies>& species,
-                                        const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd, float dt, const Vec3d& gravity) {
+                                        const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd, float dt,
+                                        const Vec3d& gravity) {
     if (colliders.empty()) return {};
     const std::vector<uint32_t>& leaves = grid.particleLeaves();
     return reduceLeafRanges(
@@ -212,7 +220,8 @@ ProjectionSummary projectOutOfColliders(const SparseGrid& grid, std::vector<AnyS
                         [&](auto& sp) {
                             for (std::size_t c = 0; c < colliders.size(); ++c) {
                                 const Collider::ProjectionResult r = colliders[c]->projectParticles(
-                                    sp.p, sp.leafStart[l], sp.leafStart[l + 1], grid.leaf(l).origin, grid.dx(), tEnd, dt, gravity, contexts[c].get());
+                                    sp.p, sp.leafStart[l], sp.leafStart[l + 1], grid.leaf(l).origin, grid.dx(), tEnd, dt, gravity,
+                                    contexts[c].get());
                                 acc.work += r.work;
                                 acc.maxSpeed = std::max(acc.maxSpeed, r.maxSpeed);
                                 acc.moved += r.moved;

@@ -22,9 +22,9 @@ struct GridUpdateResult {
 /// With `toVelocity` false the nodes already hold velocities and only the colliders act (multi-field contact
 /// runs between the two). `owned`, when given, marks the leaves this process updates (per leaf, nonzero); the
 /// others are ghosts of leaves another rank owns, holding partial sums until their velocities arrive.
-GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders, const Vec3f& gravity,
-                                      float dt, double tEnd, const SurfaceContact& surface, bool toVelocity = true,
-                                      const std::vector<uint8_t>* owned = nullptr);
+GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders,
+                                      const Vec3f& gravity, float dt, double tEnd, const SurfaceContact& surface,
+                                      bool toVelocity = true, const std::vector<uint8_t>* owned = nullptr);
 
 /// [cells per step] Mirror mode treats material moving along a wall's normal by more than this in a step as
 /// arriving or leaving, not resting, and holds the wall there. Measured (docs/method.md, section 7): at 0.05-0.2
@@ -54,8 +54,8 @@ MirrorWalls findMirrorWalls(const SparseGrid& grid, const std::vector<std::uniqu
 /// sums) from its owner through `fetch`, called once on every rank (collective): the values read are those one
 /// process reads, so the bits are the same.
 struct RemoteNodes {
-    const std::vector<uint8_t>* owned = nullptr;             ///< per leaf of the grid: owned by this rank
-    std::function<bool(const Vec3i& node)> local;           ///< whether this rank owns the node's leaf
+    const std::vector<uint8_t>* owned = nullptr;   ///< per leaf of the grid: owned by this rank
+    std::function<bool(const Vec3i& node)> local;  ///< whether this rank owns the node's leaf
     /// The owners' mass and velocity of each node, in order.
     std::function<void(const std::vector<Vec3i>& nodes, std::vector<float>& mass, std::vector<Vec3f>& velocity)> fetch;
 };
@@ -86,6 +86,7 @@ struct ProjectionSummary {
 
 /// The particle pass: every collider, every particle of every leaf near it, at time tEnd after a step dt.
 ProjectionSummary projectOutOfColliders(const SparseGrid& grid, std::vector<AnySpecies>& species,
-                                        const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd, float dt, const Vec3d& gravity);
+                                        const std::vector<std::unique_ptr<Collider>>& colliders, double tEnd, float dt,
+                                        const Vec3d& gravity);
 
 }  // namespace mpm

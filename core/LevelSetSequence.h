@@ -5,10 +5,10 @@
 // otherwise at the speed the interpolation implies, v = -(dphi/dt) grad phi / |grad phi|^2 (the level set
 // equation). Frames are read when a substep first needs them, and only two are kept.
 #include <climits>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <memory>
-#include <cmath>
 
 #include "core/LevelSet.h"
 

@@ -30,7 +30,8 @@ Motion Motion::keyframes(std::vector<Key> keys, const Vec3d& pivot, double fps) 
 Pose Motion::at(double t) const {
     Pose pose;
     switch (kind_) {
-        case Kind::None: return pose;
+        case Kind::None:
+            return pose;
         case Kind::Constant: {
             const double angle = angular_.norm() * t;
             pose.R = angle > 0.0 ? Eigen::AngleAxisd(angle, angular_.normalized()).toRotationMatrix() : Mat3d::Identity();
@@ -60,7 +61,8 @@ Pose Motion::at(double t) const {
 Motion::Rates Motion::ratesAt(double t) const {
     Rates r;
     switch (kind_) {
-        case Kind::None: return r;
+        case Kind::None:
+            return r;
         case Kind::Constant:
             // T(t) = pivot + v t - R pivot, so dT/dt = v - w x (R pivot) and v_c(x) = v + w x (x - pivot - v t).
             r.angular = angular_;

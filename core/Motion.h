@@ -28,7 +28,7 @@ class Motion {
 public:
     struct Key {
         double frame = 0.0;
-        Vec3d position = Vec3d::Zero();                   ///< of the pivot
+        Vec3d position = Vec3d::Zero();  ///< of the pivot
         Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
     };
 

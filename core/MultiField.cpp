@@ -108,7 +108,8 @@ FieldContactSummary resolveFieldContact(std::vector<SparseGrid>& fields, float f
                             momentum += at.mass[n] * Eigen::Map<const Vec3f>(at.momentum + 3 * n);
                             gradient[k] = massGradient(node, [&](const Vec3i& x) {
                                 if (remote && !remote->local(x))
-                                    return farMass[g][std::size_t(std::lower_bound(far[g].begin(), far[g].end(), x, nodeLess) - far[g].begin())];
+                                    return farMass[g][std::size_t(std::lower_bound(far[g].begin(), far[g].end(), x, nodeLess) -
+                                                                  far[g].begin())];
                                 return lookup[g].massAt(x, &at);
                             });
                             sum += gradient[k];

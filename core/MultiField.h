@@ -25,8 +25,8 @@ struct FieldContactSummary {
 };
 
 /// Applies the contact condition on every node that more than one field has mass at. The fields hold
-/// velocities (after gravity, before colliders). Each node is handled by one task, the one visiting the lowest field that has mass there, so the
-/// result does not depend on the thread count.
+/// velocities (after gravity, before colliders). Each node is handled by one task, the one visiting the lowest field that has
+/// mass there, so the result does not depend on the thread count.
 ///
 /// On ranks (`remote` given) only owned leaves are handled (a leaf coordinate has one owner in every field), and
 /// the masses a normal reads in leaves other ranks own come from their owners through `remote.fetch`, called

@@ -48,16 +48,24 @@ struct SimState {
         out.nextId = nextId, out.emittedFrame = emittedFrame, out.retries = retries;
         out.streamFlow = streamFlow, out.streamLayers = streamLayers, out.bounds = bounds, out.energy = energy;
         for (const AnySpecies& s : species)
-            std::visit([&](const auto& sp) { out.species.emplace_back(std::decay_t<decltype(sp)>{sp.name, sp.params, {}, {}, {}}); }, s);
+            std::visit(
+                [&](const auto& sp) {
+                    out.species.emplace_back(std::decay_t<decltype(sp)>{sp.name, sp.params, {}, {}, {}});
+                },
+                s);
         return out;
     }
 
     /// Calls f on every field but the species and the stiffness keys, in a fixed order (checkpoints write
     /// them in this order).
     template <class F>
-    void forEachScalar(F&& f) { each(*this, f); }
+    void forEachScalar(F&& f) {
+        each(*this, f);
+    }
     template <class F>
-    void forEachScalar(F&& f) const { each(*this, f); }
+    void forEachScalar(F&& f) const {
+        each(*this, f);
+    }
 
 private:
     template <class Self, class F>

@@ -22,9 +22,13 @@ struct ParticleArrays {
     std::vector<uint16_t> set;   ///< index of the particle set that emitted it
 
     template <class F>
-    void forEachArray(F&& f) { each(*this, f); }
+    void forEachArray(F&& f) {
+        each(*this, f);
+    }
     template <class F>
-    void forEachArray(F&& f) const { each(*this, f); }
+    void forEachArray(F&& f) const {
+        each(*this, f);
+    }
     std::size_t size() const { return x.size(); }
 
 private:

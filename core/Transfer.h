@@ -40,10 +40,10 @@ struct G2PSummary {
 /// that lie in its neighbour d (1..7), the leaf at the particle leaf's coordinate + d.
 struct HaloParts {
     struct Part {
-        Vec3i leaf;             ///< leaf coordinate of the leaf receiving the part
-        int32_t d;              ///< which neighbour of its particle leaf that leaf is
-        int8_t lo[3], hi[3];    ///< the part's box in the particle leaf's block coordinates
-        uint64_t offset;        ///< where its nodes start in data, in nodes (4 floats: mass, momentum)
+        Vec3i leaf;           ///< leaf coordinate of the leaf receiving the part
+        int32_t d;            ///< which neighbour of its particle leaf that leaf is
+        int8_t lo[3], hi[3];  ///< the part's box in the particle leaf's block coordinates
+        uint64_t offset;      ///< where its nodes start in data, in nodes (4 floats: mass, momentum)
     };
     std::vector<Part> parts;
     std::vector<float> data;

@@ -7,8 +7,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <map>
 #include <iterator>
+#include <map>
 #include <regex>
 #include <thread>
 #include <tuple>
@@ -72,12 +72,14 @@ public:
         sum_.add(static_cast<const char*>(p), n);
         os_.write(static_cast<const char*>(p), std::streamsize(n));
     }
-    template <class T> void value(const T& v) {
+    template <class T>
+    void value(const T& v) {
         static_assert(std::is_trivially_copyable_v<T>);
         bytes(&v, sizeof(T));
     }
     /// A per-particle array: element size, count, then Blosc chunks of (raw bytes, compressed bytes, data).
-    template <class T> void array(const std::vector<T>& a) {
+    template <class T>
+    void array(const std::vector<T>& a) {
         // Eigen's fixed-size types are plain values without being trivially copyable in the language's sense.
         static_assert(std::is_trivially_destructible_v<T>, "per-particle attributes are plain values");
         value(uint32_t(sizeof(T)));
@@ -103,9 +105,12 @@ public:
 
 private:
     /// The shuffle works on the scalar a value is made of (a float of a Vec3f, a double of a Vec3d).
-    template <class T> static std::size_t elementSize() {
-        if constexpr (std::is_arithmetic_v<T>) return sizeof(T);
-        else return sizeof(typename T::Scalar);
+    template <class T>
+    static std::size_t elementSize() {
+        if constexpr (std::is_arithmetic_v<T>)
+            return sizeof(T);
+        else
+            return sizeof(typename T::Scalar);
     }
     std::ostream& os_;
     Checksum sum_;
@@ -121,15 +126,18 @@ public:
         std::memcpy(out, p_, n);
         p_ += n;
     }
-    template <class T> T value() {
+    template <class T>
+    T value() {
         T v;
         bytes(&v, sizeof(T));
         return v;
     }
-    template <class T> void array(std::vector<T>& a) {
+    template <class T>
+    void array(std::vector<T>& a) {
         if (value<uint32_t>() != sizeof(T)) fail("an array's element size differs from this program's");
         const uint64_t count = value<uint64_t>();
-        if (count > uint64_t(end_ - p_) * 1024) fail("an array claims more elements than the file can hold");  // Blosc ratio bound
+        if (count > uint64_t(end_ - p_) * 1024)
+            fail("an array claims more elements than the file can hold");  // Blosc ratio bound
         a.resize(count);
         char* dst = reinterpret_cast<char*>(a.data());
         std::size_t left = count * sizeof(T);
@@ -193,8 +201,9 @@ CheckpointInfo infoOf(const json& h, const std::string& path) {
         info.part = h.value("part", 0);
         info.parts = h.value("parts", 1);
         info.set = h.value("set", std::string());
-        if (info.parts < 1 || info.part < 0 || info.part >= info.parts) throw CheckpointError(path + ": header: part " +
-            std::to_string(info.part) + " of " + std::to_string(info.parts) + " parts");
+        if (info.parts < 1 || info.part < 0 || info.part >= info.parts)
+            throw CheckpointError(path + ": header: part " + std::to_string(info.part) + " of " + std::to_string(info.parts) +
+                                  " parts");
         return info;
     } catch (const json::exception& e) {
         throw CheckpointError(path + ": header: " + e.what());
@@ -363,8 +372,10 @@ std::string checkpointPath(const std::string& dir, const std::string& scene, int
 
 std::string checkpointPartPath(const std::string& dir, const std::string& scene, int frame, int part) {
     char buf[48];
-    if (part < 0) std::snprintf(buf, sizeof(buf), "%04d_rank*", frame);
-    else std::snprintf(buf, sizeof(buf), "%04d_rank%03d", frame, part);
+    if (part < 0)
+        std::snprintf(buf, sizeof(buf), "%04d_rank*", frame);
+    else
+        std::snprintf(buf, sizeof(buf), "%04d_rank%03d", frame, part);
     return dir + "/" + scene + "_checkpoint_" + buf + ".mpmc";
 }
 
@@ -389,8 +400,10 @@ std::vector<CheckpointFiles> listCheckpoints(const std::string& dir, const std::
         if (!std::regex_match(rest, m, kName) || m[1].length() > 9 || m[3].length() > 9) continue;
         CheckpointFiles& f = byFrame[std::stoi(m[1].str())];
         f.frame = std::stoi(m[1].str());
-        if (m[2].matched) f.parts.emplace_back(std::stoi(m[3].str()), e.path().string());
-        else f.whole = e.path().string();
+        if (m[2].matched)
+            f.parts.emplace_back(std::stoi(m[3].str()), e.path().string());
+        else
+            f.whole = e.path().string();
     }
     std::vector<CheckpointFiles> out;
     for (auto& [frame, f] : byFrame) {
@@ -446,7 +459,8 @@ std::string sceneIdentity(const std::string& resolvedJson) {
     json j = json::parse(resolvedJson);
     j.erase("output");
     // Neither changes a result: how many threads, and when ranks re-cut their leaves.
-    if (j.contains("simulation") && j["simulation"].is_object()) j["simulation"].erase("threads"), j["simulation"].erase("rebalance_imbalance");
+    if (j.contains("simulation") && j["simulation"].is_object())
+        j["simulation"].erase("threads"), j["simulation"].erase("rebalance_imbalance");
     return j.dump();
 }
 
@@ -463,14 +477,18 @@ void diff(const json& a, const json& b, const std::string& path, std::vector<std
     if (out.size() >= limit || a == b) return;
     if (a.is_object() && b.is_object()) {
         for (auto it = a.begin(); it != a.end(); ++it) {
-            if (b.contains(it.key())) diff(it.value(), b.at(it.key()), path + "/" + it.key(), out, limit);
-            else if (out.size() < limit) out.push_back(path + "/" + it.key() + ": removed");
+            if (b.contains(it.key()))
+                diff(it.value(), b.at(it.key()), path + "/" + it.key(), out, limit);
+            else if (out.size() < limit)
+                out.push_back(path + "/" + it.key() + ": removed");
         }
         for (auto it = b.begin(); it != b.end(); ++it)
             if (!a.contains(it.key()) && out.size() < limit) out.push_back(path + "/" + it.key() + ": added");
         return;
     }
-    const auto primitive = [](const json& v) { return std::all_of(v.begin(), v.end(), [](const json& e) { return e.is_primitive(); }); };
+    const auto primitive = [](const json& v) {
+        return std::all_of(v.begin(), v.end(), [](const json& e) { return e.is_primitive(); });
+    };
     if (a.is_array() && b.is_array() && a.size() == b.size() && !(primitive(a) && primitive(b))) {
         for (std::size_t i = 0; i < a.size(); ++i) diff(a[i], b[i], path + "/" + std::to_string(i), out, limit);
         return;

@@ -32,17 +32,17 @@ public:
 
 struct CheckpointInfo {
     int format = 0;
-    std::string program;     ///< program name and version that wrote it
+    std::string program;  ///< program name and version that wrote it
     std::string sceneName;
-    int frame = 0;           ///< frames completed (the next frame written is frame + 1)
+    int frame = 0;  ///< frames completed (the next frame written is frame + 1)
     double time = 0.0;
-    bool midFrame = false;   ///< written on an interruption inside frame + 1
-    std::string sceneHash;   ///< of the scene's identity (sceneIdentity)
-    std::string sceneJson;   ///< that identity, to name what changed
-    std::string statsCsv;    ///< stats.csv as it was when the checkpoint was written (a set: in part 0 alone)
-    int part = 0;            ///< of a set of parts: which one (rank order)
-    int parts = 1;           ///< 1: a whole checkpoint
-    std::string set;         ///< the set's id (empty for a whole checkpoint)
+    bool midFrame = false;  ///< written on an interruption inside frame + 1
+    std::string sceneHash;  ///< of the scene's identity (sceneIdentity)
+    std::string sceneJson;  ///< that identity, to name what changed
+    std::string statsCsv;   ///< stats.csv as it was when the checkpoint was written (a set: in part 0 alone)
+    int part = 0;           ///< of a set of parts: which one (rank order)
+    int parts = 1;          ///< 1: a whole checkpoint
+    std::string set;        ///< the set's id (empty for a whole checkpoint)
 };
 
 struct Checkpoint {
@@ -74,7 +74,7 @@ std::string checkpointPartPath(const std::string& dir, const std::string& scene,
 /// to be one complete set).
 struct CheckpointFiles {
     int frame = 0;
-    std::string whole;                            ///< empty when the frame has none
+    std::string whole;                               ///< empty when the frame has none
     std::vector<std::pair<int, std::string>> parts;  ///< (part, path), by part
     /// Every file, whole and parts.
     std::vector<std::string> all() const;

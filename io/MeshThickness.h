@@ -9,9 +9,9 @@
 namespace mpm {
 
 struct WallThickness {
-    double thinnest = 0.0;         ///< [m]: the least thickness found, or the search limit when none is thinner
-    Vec3d where = Vec3d::Zero();   ///< the triangle centroid it was measured from
-    int triangle = -1;             ///< and that triangle's index (-1: none thinner than the limit)
+    double thinnest = 0.0;        ///< [m]: the least thickness found, or the search limit when none is thinner
+    Vec3d where = Vec3d::Zero();  ///< the triangle centroid it was measured from
+    int triangle = -1;            ///< and that triangle's index (-1: none thinner than the limit)
 };
 
 /// The least thickness of the mesh's solid below `limit` [m]. The solid is the mesh's inside (its signed

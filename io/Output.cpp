@@ -87,8 +87,8 @@ void FrameWriter::writeStats() {
     writeTextAtomically(dir_ + "/stats.csv", text);
 }
 
-FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar,
-                         std::map<int, std::string> kept)
+FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory,
+                         const std::string& statsSoFar, std::map<int, std::string> kept)
     : FrameWriter(scene, layout, directory, -1) {
     kept_ = std::move(kept);
     std::error_code ec;
@@ -107,8 +107,10 @@ FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, co
 
 std::string FrameWriter::framePath(int frame, const char* suffix, const char* ext) const {
     char buf[48];
-    if (part_ >= 0) std::snprintf(buf, sizeof(buf), "%04d_rank%03d", frame, part_);
-    else std::snprintf(buf, sizeof(buf), "%04d", frame);
+    if (part_ >= 0)
+        std::snprintf(buf, sizeof(buf), "%04d_rank%03d", frame, part_);
+    else
+        std::snprintf(buf, sizeof(buf), "%04d", frame);
     return dir_ + "/" + name_ + "_" + suffix + buf + ext;
 }
 

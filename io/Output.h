@@ -20,8 +20,8 @@ public:
     /// Keeps its own copy of what it needs of the scene.
     /// `kept`: rows of an earlier stats.csv (by frame) that stay as they are, in the file beside the rows written
     /// (a run of part of a scene, --frames, replaces only its own frames' rows).
-    FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, const std::string& statsSoFar = "",
-                std::map<int, std::string> kept = {});
+    FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory,
+                const std::string& statsSoFar = "", std::map<int, std::string> kept = {});
     /// A writer of rank `part`'s part files (output.rank_files = "per_rank"): frames only, no stats.csv or
     /// scene.json (rank 0's ordinary writer keeps those).
     static FrameWriter partWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, int part);
@@ -44,7 +44,7 @@ private:
     OutputDesc output_;
     SpeciesLayout layout_;
     std::vector<SurfaceGroup> surfaces_;
-    PointAttributes attributes_;  ///< Cd per set and the extra attributes asked for
+    PointAttributes attributes_;    ///< Cd per set and the extra attributes asked for
     double particleSpacing_ = 0.0;  ///< what the surface resolves
     std::string dir_;
     std::string csv_;

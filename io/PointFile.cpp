@@ -21,10 +21,10 @@ struct Scalar {
 bool scalarOf(const std::string& name, Scalar& s) {
     // PLY's names and their sized aliases (int8, uint8, ..., float32, float64).
     static const std::pair<const char*, Scalar> kTypes[] = {
-        {"char", {1, false, true}},   {"int8", {1, false, true}},    {"uchar", {1, false, false}}, {"uint8", {1, false, false}},
-        {"short", {2, false, true}},  {"int16", {2, false, true}},   {"ushort", {2, false, false}}, {"uint16", {2, false, false}},
-        {"int", {4, false, true}},    {"int32", {4, false, true}},   {"uint", {4, false, false}},  {"uint32", {4, false, false}},
-        {"float", {4, true, true}},   {"float32", {4, true, true}},  {"double", {8, true, true}},  {"float64", {8, true, true}}};
+        {"char", {1, false, true}},  {"int8", {1, false, true}},   {"uchar", {1, false, false}},  {"uint8", {1, false, false}},
+        {"short", {2, false, true}}, {"int16", {2, false, true}},  {"ushort", {2, false, false}}, {"uint16", {2, false, false}},
+        {"int", {4, false, true}},   {"int32", {4, false, true}},  {"uint", {4, false, false}},   {"uint32", {4, false, false}},
+        {"float", {4, true, true}},  {"float32", {4, true, true}}, {"double", {8, true, true}},   {"float64", {8, true, true}}};
     for (const auto& [n, t] : kTypes)
         if (name == n) return s = t, true;
     return false;
@@ -58,7 +58,8 @@ double decode(const unsigned char* p, const Scalar& t, bool swap) {
         return d;
     }
     switch (t.bytes) {
-        case 1: return t.isSigned ? double(int8_t(b[0])) : double(b[0]);
+        case 1:
+            return t.isSigned ? double(int8_t(b[0])) : double(b[0]);
         case 2: {
             uint16_t u;
             std::memcpy(&u, b, 2);
@@ -82,15 +83,24 @@ Channels channelsOf(const Element& e) {
     for (int i = 0; i < int(e.properties.size()); ++i) {
         const std::string& n = e.properties[std::size_t(i)].name;
         if (e.properties[std::size_t(i)].list) continue;
-        if (n == "x") c.x = i;
-        else if (n == "y") c.y = i;
-        else if (n == "z") c.z = i;
-        else if (n == "vx" || n == "v.x" || n == "velocity_x") c.vx = i;
-        else if (n == "vy" || n == "v.y" || n == "velocity_y") c.vy = i;
-        else if (n == "vz" || n == "v.z" || n == "velocity_z") c.vz = i;
-        else if (n == "pscale" || n == "radius") c.pscale = i;
-        else if (n == "mass") c.mass = i;
-        else if (n == "density") c.density = i;
+        if (n == "x")
+            c.x = i;
+        else if (n == "y")
+            c.y = i;
+        else if (n == "z")
+            c.z = i;
+        else if (n == "vx" || n == "v.x" || n == "velocity_x")
+            c.vx = i;
+        else if (n == "vy" || n == "v.y" || n == "velocity_y")
+            c.vy = i;
+        else if (n == "vz" || n == "v.z" || n == "velocity_z")
+            c.vz = i;
+        else if (n == "pscale" || n == "radius")
+            c.pscale = i;
+        else if (n == "mass")
+            c.mass = i;
+        else if (n == "density")
+            c.density = i;
     }
     return c;
 }
@@ -102,7 +112,8 @@ PointCloudData readPlyPoints(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw PointFileError(path + ": cannot open the file");
     std::string line;
-    if (!std::getline(in, line) || line.substr(0, 3) != "ply") throw PointFileError(path + ": not a PLY file (it does not start with \"ply\")");
+    if (!std::getline(in, line) || line.substr(0, 3) != "ply")
+        throw PointFileError(path + ": not a PLY file (it does not start with \"ply\")");
     Format format = Format::Ascii;
     std::vector<Element> elements;
     bool ended = false;
@@ -119,10 +130,14 @@ PointCloudData readPlyPoints(const std::string& path) {
         if (key == "format") {
             std::string f;
             words >> f;
-            if (f == "ascii") format = Format::Ascii;
-            else if (f == "binary_little_endian") format = Format::LittleEndian;
-            else if (f == "binary_big_endian") format = Format::BigEndian;
-            else throw bad("unknown format; allowed: ascii, binary_little_endian, binary_big_endian");
+            if (f == "ascii")
+                format = Format::Ascii;
+            else if (f == "binary_little_endian")
+                format = Format::LittleEndian;
+            else if (f == "binary_big_endian")
+                format = Format::BigEndian;
+            else
+                throw bad("unknown format; allowed: ascii, binary_little_endian, binary_big_endian");
         } else if (key == "element") {
             Element e;
             if (!(words >> e.name >> e.count) || e.count < 0) throw bad("an element needs a name and a count");
@@ -155,7 +170,8 @@ PointCloudData readPlyPoints(const std::string& path) {
     if (ch.x < 0 || ch.y < 0 || ch.z < 0) {
         std::string names;
         for (const Property& p : vertex->properties) names += (names.empty() ? "" : ", ") + p.name;
-        throw PointFileError(path + ": the vertices have no x, y, z properties (they have: " + (names.empty() ? "none" : names) + ")");
+        throw PointFileError(path + ": the vertices have no x, y, z properties (they have: " + (names.empty() ? "none" : names) +
+                             ")");
     }
     if (vertex->count == 0) throw PointFileError(path + ": the file holds no points");
     const bool velocity = ch.vx >= 0 && ch.vy >= 0 && ch.vz >= 0;
@@ -166,14 +182,15 @@ PointCloudData readPlyPoints(const std::string& path) {
     auto take = [&](const Element& e, const std::vector<double>& vals) {
         if (&e != &*vertex) return;
         out.x.emplace_back(vals[std::size_t(ch.x)], vals[std::size_t(ch.y)], vals[std::size_t(ch.z)]);
-        if (velocity) out.v.emplace_back(float(vals[std::size_t(ch.vx)]), float(vals[std::size_t(ch.vy)]), float(vals[std::size_t(ch.vz)]));
+        if (velocity)
+            out.v.emplace_back(float(vals[std::size_t(ch.vx)]), float(vals[std::size_t(ch.vy)]), float(vals[std::size_t(ch.vz)]));
         if (ch.pscale >= 0) out.pscale.push_back(float(vals[std::size_t(ch.pscale)]));
         if (ch.mass >= 0) out.mass.push_back(float(vals[std::size_t(ch.mass)]));
         if (ch.density >= 0) out.density.push_back(float(vals[std::size_t(ch.density)]));
     };
     auto truncated = [&](const Element& e, long long i) {
-        return PointFileError(path + ": the body ends in element \"" + e.name + "\" " + std::to_string(i) + " of " + std::to_string(e.count) +
-                              " (a truncated or damaged file)");
+        return PointFileError(path + ": the body ends in element \"" + e.name + "\" " + std::to_string(i) + " of " +
+                              std::to_string(e.count) + " (a truncated or damaged file)");
     };
     // The elements in file order: those before the vertices are read and dropped.
     for (const Element& e : elements) {

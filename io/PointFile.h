@@ -1,8 +1,8 @@
 #pragma once
 // Point clouds from the user's tools as particle sets: the vertices of a PLY file (ASCII or binary, either
 // byte order, as Houdini, Blender and CloudCompare write them) with their positions and, when the file has
-// them, velocities (vx, vy, vz, or Houdini's v.x...), radii (pscale), masses (mass) and densities (density). Our own reader: assimp, the mesh
-// library used elsewhere, keeps a PLY's positions but drops custom vertex properties such as velocity.
+// them, velocities (vx, vy, vz, or Houdini's v.x...), radii (pscale), masses (mass) and densities (density). Our own reader:
+// assimp, the mesh library used elsewhere, keeps a PLY's positions but drops custom vertex properties such as velocity.
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -19,8 +19,8 @@ public:
 
 struct PointCloudData {
     std::vector<Vec3d> x;
-    std::vector<Vec3f> v;       ///< empty when the file has no velocities
-    std::vector<float> pscale;  ///< empty when the file has no radii
+    std::vector<Vec3f> v;        ///< empty when the file has no velocities
+    std::vector<float> pscale;   ///< empty when the file has no radii
     std::vector<float> mass;     ///< [kg]; empty when the file has no masses
     std::vector<float> density;  ///< [kg/m^3]; empty when the file has no densities
 };

@@ -78,7 +78,8 @@ public:
             throw std::length_error("Poisson-disk sampling: the shape is " + std::to_string(span.maxCoeff()) +
                                     " tiles of 4.6 minimum distances long, more than " + std::to_string(kMaxTiles));
         tiles_ = span.cast<int>();
-        reachR_ = offsetsWithin(r_), reachSeed_ = offsetsWithin(kSeedSpacing * r_), reachPiece_ = offsetsWithin(kPieceSeedSpacing * r_);
+        reachR_ = offsetsWithin(r_), reachSeed_ = offsetsWithin(kSeedSpacing * r_),
+        reachPiece_ = offsetsWithin(kPieceSeedSpacing * r_);
     }
     Vec3i tileCounts() const { return tiles_; }
 
@@ -141,10 +142,10 @@ public:
     }
 
 private:
-    static constexpr int kTileCells = 8;  ///< background cells along a tile's edge (a tile is 4.6 r wide)
-    static constexpr int kMaxTiles = (1 << 20) - 2;  ///< along an axis: what a key's 21 bits hold
-    static constexpr int kTileShift = 3;  ///< log2(kTileCells)
-    static constexpr int kPhases = 8;     ///< tile parities in 3D
+    static constexpr int kTileCells = 8;              ///< background cells along a tile's edge (a tile is 4.6 r wide)
+    static constexpr int kMaxTiles = (1 << 20) - 2;   ///< along an axis: what a key's 21 bits hold
+    static constexpr int kTileShift = 3;              ///< log2(kTileCells)
+    static constexpr int kPhases = 8;                 ///< tile parities in 3D
     static constexpr double kSeedSpacing = 2.0;       ///< in r: a tile seeds a new growth this clear of points
     static constexpr double kPieceSeedSpacing = 1.5;  ///< in r: a file's thin pieces are seeded this clear of points
 
@@ -172,9 +173,7 @@ private:
 
     static int phaseOf(const Vec3i& t) { return (t[0] & 1) | (t[1] & 1) << 1 | (t[2] & 1) << 2; }
     /// Tiles lie in [-1, 2^20 - 2] along each axis (a tile is at least r wide: 2^20 of them is far beyond memory).
-    static uint64_t key(const Vec3i& t) {
-        return uint64_t(t[0] + 1) << 42 | uint64_t(t[1] + 1) << 21 | uint64_t(t[2] + 1);
-    }
+    static uint64_t key(const Vec3i& t) { return uint64_t(t[0] + 1) << 42 | uint64_t(t[1] + 1) << 21 | uint64_t(t[2] + 1); }
     static Vec3i tileOfKey(uint64_t k) {
         constexpr uint64_t m = (uint64_t(1) << 21) - 1;
         return Vec3i(int(k >> 42 & m) - 1, int(k >> 21 & m) - 1, int(k & m) - 1);
@@ -212,8 +211,10 @@ private:
         // A point belongs to this tile when its cell does (the test the lookups above make, rounding included).
         // A file's shape is read through a sampler of this task's own.
         const auto shape = [&] {
-            if constexpr (requires { shape_.withOwnSampler(); }) return shape_.withOwnSampler();
-            else return shape_;
+            if constexpr (requires { shape_.withOwnSampler(); })
+                return shape_.withOwnSampler();
+            else
+                return shape_;
         }();
         auto mine = [&](const Vec3d& x) {
             if ((x.array() < lo_.array()).any() || (x.array() >= hi_.array()).any()) return false;
@@ -270,7 +271,8 @@ private:
                         if (me.cell[std::size_t(localOf(c))] >= 0) continue;
                         const Vec3d corner = lo_ + c.cast<double>() * cell_;
                         const Vec3d centre = corner + Vec3d::Constant(0.5 * cell_);
-                        const Vec3d tries[2] = {random ? Vec3d(corner + cell_ * Vec3d(u01(rng), u01(rng), u01(rng))) : centre, centre};
+                        const Vec3d tries[2] = {random ? Vec3d(corner + cell_ * Vec3d(u01(rng), u01(rng), u01(rng))) : centre,
+                                                centre};
                         for (int q = random ? 0 : 1; q < 2; ++q)
                             if (const Vec3d& x = tries[q]; cellOf(x) == c && mine(x) && clearWithin(x, reach, spacing)) {
                                 accept(x);
@@ -334,8 +336,8 @@ std::vector<Vec3d> shareOf(std::vector<Vec3d> all, SamplePart part) {
 }
 
 template <class Shape>
-std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCell, long long count, Sampling method, unsigned seed,
-                            SamplePart part) {
+std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCell, long long count, Sampling method,
+                            unsigned seed, SamplePart part) {
     const double perVolume = count > 0 ? double(count) / shape.volume() : particlesPerCell / (dx * dx * dx);
     std::vector<Vec3d> pts;
     if (method != Sampling::Poisson) {

@@ -51,7 +51,9 @@ struct SamplePart {
     void checkStop() const;
     /// The part's items [first, second) of n in order: the part-th of `parts` nearly equal ranges.
     std::pair<std::size_t, std::size_t> range(std::size_t n) const {
-        const auto cut = [&](int k) { return std::size_t((unsigned long long)n * (unsigned long long)k / (unsigned long long)parts); };
+        const auto cut = [&](int k) {
+            return std::size_t((unsigned long long)n * (unsigned long long)k / (unsigned long long)parts);
+        };
         return {cut(part), cut(part + 1)};
     }
 };

@@ -49,8 +49,10 @@ template <class M>
 float restWaveSpeed(const typename M::Params& p) {
     Species<M> s;
     s.params = p;
-    if constexpr (requires { s.state.appendRest(1, s.params); }) s.state.appendRest(1, s.params);
-    else s.state.appendRest(1);
+    if constexpr (requires { s.state.appendRest(1, s.params); })
+        s.state.appendRest(1, s.params);
+    else
+        s.state.appendRest(1);
     return M::waveSpeed(p, M::stiffnessKey(s.state, 0));
 }
 
@@ -61,7 +63,6 @@ long long emissionsWithin(const ParticleSetDesc& d, int frames) {
     if (last >= d.startFrame) n = (last - d.startFrame) / period + 1;
     return n;
 }
-
 
 /// Frames that a set's particles of one emission spend in the scene, summed over its emissions (a stream's whole
 /// flow: its particles enter evenly over its duration).
@@ -79,11 +80,16 @@ double framesPresent(const ParticleSetDesc& d, int frames) {
 std::string duration(double seconds) {
     std::ostringstream s;
     s.precision(2);
-    if (seconds < 1.0) s << "under a second";
-    else if (seconds < 120.0) s << std::fixed << seconds << " s";
-    else if (seconds < 2.0 * 3600.0) s << std::fixed << seconds / 60.0 << " min";
-    else if (seconds < 2.0 * 86400.0) s << std::fixed << seconds / 3600.0 << " h";
-    else s << std::fixed << seconds / 86400.0 << " days";
+    if (seconds < 1.0)
+        s << "under a second";
+    else if (seconds < 120.0)
+        s << std::fixed << seconds << " s";
+    else if (seconds < 2.0 * 3600.0)
+        s << std::fixed << seconds / 60.0 << " min";
+    else if (seconds < 2.0 * 86400.0)
+        s << std::fixed << seconds / 3600.0 << " h";
+    else
+        s << std::fixed << seconds / 86400.0 << " days";
     return s.str();
 }
 
@@ -106,10 +112,14 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         setExtent(scene, i, s.volume, lo, hi);
         const double largestCoordinate = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
         const double expected = d.count > 0 ? double(d.count) : s.volume / cell * d.particlesPerCell;
-        if (d.count > 0) s.particles = d.count;
-        else if (d.continuous) s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
-        else if (countExactly && expected <= kSampleUpTo) s.particles = (long long)sampleSet(scene, i).positions.size();
-        else s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
+        if (d.count > 0)
+            s.particles = d.count;
+        else if (d.continuous)
+            s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
+        else if (countExactly && expected <= kSampleUpTo)
+            s.particles = (long long)sampleSet(scene, i).positions.size();
+        else
+            s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
         s.emissions = d.continuous ? 1 : emissionsWithin(d, scene.frames);  // a stream's volume is its whole flow
         double perParticle = 0.0, density = 0.0;
         visitMaterialParams(d.params, [&]<class M>(const typename M::Params& p) {
@@ -131,7 +141,8 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         // unless frames and checkpoints go to per-rank part files.
         const bool gathers = scene.output.rankFiles == "gathered";
         const double perRank = ranks > 1 ? simulated / ranks + (gathers ? perParticle : 0.0) : simulated;
-        const double output = ranks > 1 && scene.output.rankFiles == "per_rank" ? kOutputBytesPerParticle / ranks : kOutputBytesPerParticle;
+        const double output =
+            ranks > 1 && scene.output.rankFiles == "per_rank" ? kOutputBytesPerParticle / ranks : kOutputBytesPerParticle;
         // The emitter keeps its samples until it last emits: on ranks, each its part of a set given by its
         // density; every sample of a set given by its count, or of a point cloud, while it is sampled.
         const bool inParts = ranks > 1 && d.count <= 0 && !std::holds_alternative<PointsShape>(d.shape);
@@ -139,17 +150,24 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         if (largestCoordinate / dx >= kMaxGridCoordinate) {
             std::ostringstream p;
             p << where << "/shape: lies " << largestCoordinate << " m from the origin, beyond the grid's coordinate range of "
-              << "+-2^30 cells (" << kMaxGridCoordinate * dx << " m at dx = " << dx << " m); move it nearer the origin or use a larger dx";
+              << "+-2^30 cells (" << kMaxGridCoordinate * dx << " m at dx = " << dx
+              << " m); move it nearer the origin or use a larger dx";
             b.problems.push_back(p.str());
         }
         b.sets.push_back(s);
     }
     b.machineBytes = machineMemoryBytes();
     if (b.memoryBytes > b.machineBytes)
-        b.problems.push_back("/sets: " + std::string(ranks > 1 ? "rank 0 of " + std::to_string(ranks) + " (its share" + std::string(scene.output.rankFiles == "gathered" ? ", and every particle gathered to write a frame or checkpoint)" : ")") : "the run") +
-                             " needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) +
-                             " particles, and this machine has " + gib(b.machineBytes) +
-                             "; use fewer particles (particles_per_cell, count, duration) or a larger dx");
+        b.problems.push_back(
+            "/sets: " +
+            std::string(ranks > 1 ? "rank 0 of " + std::to_string(ranks) + " (its share" +
+                                        std::string(scene.output.rankFiles == "gathered"
+                                                        ? ", and every particle gathered to write a frame or checkpoint)"
+                                                        : ")")
+                                  : "the run") +
+            " needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) +
+            " particles, and this machine has " + gib(b.machineBytes) +
+            "; use fewer particles (particles_per_cell, count, duration) or a larger dx");
     // The first step: the target, or the CFL bound at rest (the same rule as the engine's).
     const double target = st.targetDt();
     const double speed = double(c) + double(vmax), g = st.gravity.norm(), reach = st.cfl * dx;
@@ -161,11 +179,14 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
     std::ostringstream cause;
     if (displacement < b.dt) {
         b.dt = displacement;
-        cause << "the displacement rule, simulation.max_displacement = " << st.maxDisplacement << " cells a substep at the initial speed "
-              << vmax << " m/s";
-    } else if (!st.adaptive || target <= cfl) cause << "the target step 1 / (fps * substeps)";
-    else if (c >= vmax) cause << "the CFL bound from the wave speed " << c << " m/s of set " << stiffest;
-    else cause << "the CFL bound from the initial speed " << vmax << " m/s";
+        cause << "the displacement rule, simulation.max_displacement = " << st.maxDisplacement
+              << " cells a substep at the initial speed " << vmax << " m/s";
+    } else if (!st.adaptive || target <= cfl)
+        cause << "the target step 1 / (fps * substeps)";
+    else if (c >= vmax)
+        cause << "the CFL bound from the wave speed " << c << " m/s of set " << stiffest;
+    else
+        cause << "the CFL bound from the initial speed " << vmax << " m/s";
     b.stepCause = cause.str();
     b.substepsPerFrame = std::ceil(1.0 / (st.fps * b.dt));
     b.particleSubsteps *= b.substepsPerFrame;
@@ -180,14 +201,17 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
     for (std::size_t i = 0; i < scene.colliders.size(); ++i) {
         const double far = std::visit(
             []<class S>(const S& s) {
-                if constexpr (kFromFile<S>) return 0.0;  // known once its file is read
-                else return s.middle().cwiseAbs().maxCoeff();
+                if constexpr (kFromFile<S>)
+                    return 0.0;  // known once its file is read
+                else
+                    return s.middle().cwiseAbs().maxCoeff();
             },
             scene.colliders[i].shape);
         if (far / dx >= kMaxGridCoordinate) {
             std::ostringstream p;
-            p << "/colliders/" << i << ": lies " << far << " m from the origin, beyond the grid's coordinate range of +-2^30 cells ("
-              << kMaxGridCoordinate * dx << " m at dx = " << dx << " m)";
+            p << "/colliders/" << i << ": lies " << far
+              << " m from the origin, beyond the grid's coordinate range of +-2^30 cells (" << kMaxGridCoordinate * dx
+              << " m at dx = " << dx << " m)";
             b.problems.push_back(p.str());
         }
     }
@@ -197,11 +221,13 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
 std::string describeBudget(const SceneBudget& b) {
     std::ostringstream s;
     for (const SetBudget& set : b.sets)
-        s << "set " << set.name << ": " << (set.estimated ? "about " : "") << set.particles << " particles, " << set.mass << " kg, "
-          << set.volume << " m^3 per emission; " << set.emissions << " emission" << (set.emissions == 1 ? "" : "s") << "\n";
-    s << "memory: about " << gib(b.memoryBytes) << " at the peak (" << (long long)b.peakParticles << " particles); this machine has "
-      << gib(b.machineBytes) << "\n";
-    s << "substeps per frame: about " << b.substepsPerFrame << " at the start (dt = " << b.dt << " s, set by " << b.stepCause << ")\n";
+        s << "set " << set.name << ": " << (set.estimated ? "about " : "") << set.particles << " particles, " << set.mass
+          << " kg, " << set.volume << " m^3 per emission; " << set.emissions << " emission" << (set.emissions == 1 ? "" : "s")
+          << "\n";
+    s << "memory: about " << gib(b.memoryBytes) << " at the peak (" << (long long)b.peakParticles
+      << " particles); this machine has " << gib(b.machineBytes) << "\n";
+    s << "substeps per frame: about " << b.substepsPerFrame << " at the start (dt = " << b.dt << " s, set by " << b.stepCause
+      << ")\n";
     if (b.runSeconds > 0.0) s << "run time: about " << duration(b.runSeconds) << " here (" << b.runBasis << ")\n";
     return s.str();
 }

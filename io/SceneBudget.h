@@ -21,15 +21,15 @@ struct SetBudget {
 
 struct SceneBudget {
     std::vector<SetBudget> sets;
-    double peakParticles = 0.0;     ///< once every emission is done
-    double memoryBytes = 0.0;       ///< peak, estimated
-    double machineBytes = 0.0;      ///< physical memory of this machine
-    double substepsPerFrame = 0.0;  ///< at the start
-    double dt = 0.0;                ///< the first step
-    std::string stepCause;          ///< what bounds it
-    double particleSubsteps = 0.0;  ///< the work of the whole run: each particle's substeps, at the first step's rate
-    double runSeconds = 0.0;        ///< the run's expected length on this machine (io/RunEstimate.h); 0: not estimated
-    std::string runBasis;           ///< what runSeconds comes from, in words
+    double peakParticles = 0.0;         ///< once every emission is done
+    double memoryBytes = 0.0;           ///< peak, estimated
+    double machineBytes = 0.0;          ///< physical memory of this machine
+    double substepsPerFrame = 0.0;      ///< at the start
+    double dt = 0.0;                    ///< the first step
+    std::string stepCause;              ///< what bounds it
+    double particleSubsteps = 0.0;      ///< the work of the whole run: each particle's substeps, at the first step's rate
+    double runSeconds = 0.0;            ///< the run's expected length on this machine (io/RunEstimate.h); 0: not estimated
+    std::string runBasis;               ///< what runSeconds comes from, in words
     std::vector<std::string> problems;  ///< each "/json/path: what is wrong; what to change"
 };
 

@@ -51,7 +51,7 @@ bool resolves(double voxel, double wall) {
 struct MeshField {
     TriangleMesh mesh;
     double voxel = 0.0;
-    WallThickness wall;   ///< the thinnest wall below two default voxels (a collider's; sets are not measured)
+    WallThickness wall;  ///< the thinnest wall below two default voxels (a collider's; sets are not measured)
 };
 
 /// A mesh shape's triangles (placed by its transform for a collider, `place`; in the file's own coordinates for a
@@ -84,8 +84,9 @@ std::string thinWallWarning(const SceneDesc& scene, const std::string& where, co
     w.precision(3);
     w << scene.file << ": " << where << "/file: " << mesh.file << " has walls as thin as " << f.wall.thinnest << " m";
     if (f.wall.triangle >= 0) w << " (at " << f.wall.where[0] << ", " << f.wall.where[1] << ", " << f.wall.where[2] << ")";
-    w << "; its distance field's voxel of " << f.voxel << " m" << (mesh.voxelSize > 0.0 ? "" : " (the finest picked by itself, dx/8)")
-      << " resolves walls down to " << kVoxelsAcrossWall * f.voxel << " m, and material passes through thinner ones: set voxel_size to "
+    w << "; its distance field's voxel of " << f.voxel << " m"
+      << (mesh.voxelSize > 0.0 ? "" : " (the finest picked by itself, dx/8)") << " resolves walls down to "
+      << kVoxelsAcrossWall * f.voxel << " m, and material passes through thinner ones: set voxel_size to "
       << f.wall.thinnest / kVoxelsAcrossWall << " or less";
     return w.str();
 }
@@ -127,8 +128,8 @@ void refuseFieldTooLarge(const SceneDesc& scene, const std::string& where, const
 
 /// The level set of a file shape, built or read once: placed by its transform (a collider), or in the file's
 /// own coordinates (`placed` false: a set, sampled there and then placed).
-std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const MeshShape& m, bool place = true,
-                                           bool solidOutside = false, FieldNotes* notes = nullptr) {
+std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const MeshShape& m,
+                                           bool place = true, bool solidOutside = false, FieldNotes* notes = nullptr) {
     const double dx = scene.settings.dx / (place ? 1.0 : m.transform.scale);
     const MeshField f = meshField(scene, where, m, place, solidOutside);
     if (notes) {
@@ -153,8 +154,8 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
 std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v, bool place = true,
                                            bool = false, FieldNotes* notes = nullptr) {
     try {
-        auto ls = vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx), place ? v.transform : Placement{},
-                              place ? levelSetBand(scene.settings.dx) : 0.0);
+        auto ls = vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx),
+                              place ? v.transform : Placement{}, place ? levelSetBand(scene.settings.dx) : 0.0);
         if (notes) {
             // The middle of what is inside: a file's band may be wider on one side than on the other.
             Vec3d lo, hi;
@@ -179,7 +180,8 @@ Motion motionOf(const MotionDesc& m, const Vec3d& centre, double fps) {
 }
 
 /// A VDB sequence: a deforming collider whose frames are read as the run reaches them.
-std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::string& where, const ColliderDesc& c, const VdbShape& v) {
+std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::string& where, const ColliderDesc& c,
+                                           const VdbShape& v) {
     if (c.motion.velocity.any() || c.motion.angularVelocity.any() || !c.motion.keyframes.empty())
         throw SceneError(scene.file + ": " + where + "/motion: a sequence moves by its frames; it takes no motion");
     const std::string pattern = besideScene(scene, v.file);
@@ -187,9 +189,11 @@ std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::st
         const std::vector<int> frames = sequenceFrames(pattern);
         const double reach = colliderReach(scene.settings.dx);
         const double band = levelSetBand(scene.settings.dx);
-        const auto first = vdbLevelSet(sequenceFile(pattern, frames.front()), v.grid, reach, v.transform, band);  // checked now, not hours later
+        const auto first =
+            vdbLevelSet(sequenceFile(pattern, frames.front()), v.grid, reach, v.transform, band);  // checked now, not hours later
         if (!v.velocityGrid.empty() && v.transform.rotate.degrees != 0.0)
-            throw LevelSetError(pattern + ": a rotated sequence cannot turn its velocity grid; leave out \"rotate\" or \"velocity_grid\"");
+            throw LevelSetError(pattern +
+                                ": a rotated sequence cannot turn its velocity grid; leave out \"rotate\" or \"velocity_grid\"");
         auto load = [pattern, grid = v.grid, vel = v.velocityGrid, reach, placement = v.transform, band](int f) {
             LevelSetFrame frame;
             const std::string file = sequenceFile(pattern, f);
@@ -198,8 +202,8 @@ std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::st
             return frame;
         };
         return std::make_unique<RigidCollider<LevelSetSequenceGeometry>>(
-            LevelSetSequenceGeometry(load, frames.front(), frames.back(), scene.settings.fps, first->voxelSize()), c.boundary, c.friction,
-            Motion(), c.inside);
+            LevelSetSequenceGeometry(load, frames.front(), frames.back(), scene.settings.fps, first->voxelSize()), c.boundary,
+            c.friction, Motion(), c.inside);
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
     }
@@ -224,8 +228,8 @@ std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, 
                 const auto ls = levelSetOf(scene, where, shape, true, c.inside, &notes);
                 if (warnings && !notes.warning.empty()) warnings->push_back(notes.warning);
                 if (voxel) *voxel = notes.voxel;
-                return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction, motion(notes.centre),
-                                                                         c.inside);
+                return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction,
+                                                                         motion(notes.centre), c.inside);
             } else {
                 return analyticCollider(shape, c.boundary, c.friction, motion(shape.middle()), c.inside);
             }
@@ -246,7 +250,8 @@ SetRegionIn regionOf(const SceneDesc& scene, std::size_t i) {
             if constexpr (kFromFile<S>) {
                 if constexpr (std::is_same_v<S, VdbShape>) {
                     if (shape.file.find("$F") != std::string::npos)
-                        throw SceneError(scene.file + ": " + where + "/file: a set is filled once; a $F sequence is for colliders");
+                        throw SceneError(scene.file + ": " + where +
+                                         "/file: a set is filled once; a $F sequence is for colliders");
                     if (!shape.velocityGrid.empty())
                         throw SceneError(scene.file + ": " + where + "/velocity_grid: a set's shape takes no velocity grid");
                 }
@@ -324,13 +329,13 @@ static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i, const Sa
         const std::pair<std::size_t, std::size_t> range = part.range(all.positions.size());  // captured below: no binding
         const std::size_t begin = range.first, end = range.second;
         auto cut = [&](auto& arr) {
-            if (!arr.empty()) arr = std::decay_t<decltype(arr)>(arr.begin() + std::ptrdiff_t(begin), arr.begin() + std::ptrdiff_t(end));
+            if (!arr.empty())
+                arr = std::decay_t<decltype(arr)>(arr.begin() + std::ptrdiff_t(begin), arr.begin() + std::ptrdiff_t(end));
         };
         cut(all.positions), cut(all.velocities), cut(all.volumes), cut(all.masses);
         return all;
     }
-    if (d.continuous || isOutlet(d.shape))
-        throw std::logic_error("sampleSetShape: a continuous source is a stream (streamOf)");
+    if (d.continuous || isOutlet(d.shape)) throw std::logic_error("sampleSetShape: a continuous source is a stream (streamOf)");
     const SetRegionIn r = regionOf(scene, i);
     const double s = r.placement.scale;
     // Sampled where the file's cells are dx / scale, then placed: the same particles wherever the asset is put.
@@ -338,7 +343,8 @@ static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i, const Sa
     try {
         out.positions = sampleShape(r.region, scene.settings.dx / s, d.particlesPerCell, d.count, d.sampling, d.seed, part);
     } catch (const std::length_error& e) {
-        throw SceneError(scene.file + ": /sets/" + std::to_string(i) + "/shape: " + e.what() + "; split the set into shorter ones");
+        throw SceneError(scene.file + ": /sets/" + std::to_string(i) + "/shape: " + e.what() +
+                         "; split the set into shorter ones");
     }
     if (!r.placement.identity())
         for (Vec3d& x : out.positions) x = r.placement.apply(x);
@@ -412,8 +418,9 @@ Emitter::Stream streamOf(const SceneDesc& scene, std::size_t i) {
         throw SceneError(where + "/shape: a " + type +
                          " is a surface with no volume: material flows in through it with \"emission\": \"continuous\"");
     if (!isOutlet(d.shape))
-        throw SceneError(where + "/emission: continuous emission needs a \"disc\" or \"rectangle\" shape to flow through (closed "
-                                 "shapes emit whole copies)");
+        throw SceneError(where +
+                         "/emission: continuous emission needs a \"disc\" or \"rectangle\" shape to flow through (closed "
+                         "shapes emit whole copies)");
     if (!d.angularVelocity.isZero() || !d.velocityFile.empty())
         throw SceneError(where + ": a continuous source flows at its velocity; it takes no angular_velocity or velocity_field");
     return withOutlet(d.shape, [&](const auto& outlet) {
@@ -429,10 +436,11 @@ Emitter::Stream streamOf(const SceneDesc& scene, std::size_t i) {
         Vec3d u, w;
         outlet.sides(u, w);
         for (int layer = 0; layer < 2; ++layer)
-            for (const Eigen::Vector2d& p : outlet.lattice(layer, st.spacing)) st.layers[layer].push_back(outlet.centre + p[0] * u + p[1] * w);
+            for (const Eigen::Vector2d& p : outlet.lattice(layer, st.spacing))
+                st.layers[layer].push_back(outlet.centre + p[0] * u + p[1] * w);
         if (st.layers[0].empty() || st.layers[1].empty())
-            throw SceneError(where + "/shape: the " + type + " is narrower than one particle spacing (" + std::to_string(st.spacing) +
-                             " m)");
+            throw SceneError(where + "/shape: the " + type + " is narrower than one particle spacing (" +
+                             std::to_string(st.spacing) + " m)");
         return st;
     });
 }
@@ -484,7 +492,8 @@ constexpr double kMostlyInside = 0.5;
 [[noreturn]] void noParticleFits(const SceneDesc& scene, std::size_t i) {
     std::ostringstream what;
     what << scene.file << ": /sets/" << i << "/shape: no particle fits in the shape at dx = " << scene.settings.dx
-         << " m (particles lie about dx / cbrt(particles_per_cell) apart: a shape thinner than that holds none); make it larger or dx smaller";
+         << " m (particles lie about dx / cbrt(particles_per_cell) apart: a shape thinner than that holds none); make it larger "
+            "or dx smaller";
     throw SceneError(what.str());
 }
 
@@ -501,16 +510,17 @@ void entryWarnings(const SceneDesc& scene, std::size_t i, std::vector<std::strin
 /// Set i's word on its own sampling (n particles in all) and on each collider it starts inside of: `inside[c]` of
 /// its particles lie inside collider c at its start.
 /// `estimated`: the counts come from a coarser sampling of the set (it is too large to sample whole).
-void setWarnings(const SceneDesc& scene, std::size_t i, long long n, const std::vector<long long>& inside, std::vector<std::string>& out,
-                 bool estimated = false) {
+void setWarnings(const SceneDesc& scene, std::size_t i, long long n, const std::vector<long long>& inside,
+                 std::vector<std::string>& out, bool estimated = false) {
     const std::string where = scene.file + ": /sets/" + std::to_string(i);
     if (n < kFewParticles)
-        out.push_back(where + ": only " + std::to_string(n) + " particles; so small a body is a few cells across (raise "
-                                                               "particles_per_cell or use a smaller dx)");
+        out.push_back(where + ": only " + std::to_string(n) +
+                      " particles; so small a body is a few cells across (raise "
+                      "particles_per_cell or use a smaller dx)");
     for (std::size_t c = 0; c < inside.size(); ++c) {
         if (double(inside[c]) <= kNoticeableShare * double(n)) continue;
-        std::string what = where + "/shape: " + (estimated ? "about " : "") + std::to_string(inside[c]) + " of " + std::to_string(n) +
-                           " particles start inside collider " + std::to_string(c);
+        std::string what = where + "/shape: " + (estimated ? "about " : "") + std::to_string(inside[c]) + " of " +
+                           std::to_string(n) + " particles start inside collider " + std::to_string(c);
         if (const auto* plane = std::get_if<Plane>(&scene.colliders[c].shape)) {
             std::ostringstream normal;
             normal << plane->normal[0] << ", " << plane->normal[1] << ", " << plane->normal[2];
@@ -520,8 +530,9 @@ void setWarnings(const SceneDesc& scene, std::size_t i, long long n, const std::
             out.push_back(what + " (they are pushed out at the first substep); move the set or the collider");
             continue;
         }
-        what += ": a set mostly inside a collider is not pushed out whole (it is crushed against the surface, and the run may stop "
-                "as its energy blows up, or it falls out through the collider's far side); move the set or the collider";
+        what +=
+            ": a set mostly inside a collider is not pushed out whole (it is crushed against the surface, and the run may stop "
+            "as its energy blows up, or it falls out through the collider's far side); move the set or the collider";
         if (std::holds_alternative<Plane>(scene.colliders[c].shape)) what += ", or turn the plane's normal towards the set";
         out.push_back(what);
     }
@@ -603,7 +614,8 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
         double volume = 0.0;
         Vec3d lo, hi;
         setExtent(scene, i, volume, lo, hi);
-        const double dx = scene.settings.dx, expected = d.count > 0 ? double(d.count) : volume / (dx * dx * dx) * d.particlesPerCell;
+        const double dx = scene.settings.dx,
+                     expected = d.count > 0 ? double(d.count) : volume / (dx * dx * dx) * d.particlesPerCell;
         if (expected > kSampleUpTo) {
             // Too many to sample (and to pair with the other sets): a coarser sampling of the same shape gives the share
             // that starts inside a collider, which a set of a mistaken size is most likely to.
@@ -742,7 +754,8 @@ DerivedValues deriveValues(const SceneDesc& scene) {
     DerivedValues out;
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const ParticleSetDesc& d = scene.sets[i];
-        out.setPivot.push_back(d.angularVelocity.isZero() || d.continuous || isOutlet(d.shape) ? std::nullopt : sampleSet(scene, i).pivot);
+        out.setPivot.push_back(d.angularVelocity.isZero() || d.continuous || isOutlet(d.shape) ? std::nullopt
+                                                                                               : sampleSet(scene, i).pivot);
     }
     for (std::size_t i = 0; i < scene.colliders.size(); ++i)
         colliderOf(scene, i, &out.colliderPivot.emplace_back(), nullptr, &out.colliderVoxel.emplace_back());
@@ -752,7 +765,8 @@ DerivedValues deriveValues(const SceneDesc& scene) {
 namespace {
 /// The object with `key` set to `value` where the reader writes it, before `next` (at the end if absent): the
 /// scene a run writes reads back to the same text.
-nlohmann::ordered_json withKey(const nlohmann::ordered_json& object, const char* key, const nlohmann::ordered_json& value, const char* next) {
+nlohmann::ordered_json withKey(const nlohmann::ordered_json& object, const char* key, const nlohmann::ordered_json& value,
+                               const char* next) {
     nlohmann::ordered_json out = nlohmann::ordered_json::object();
     for (auto it = object.begin(); it != object.end(); ++it) {
         if (it.key() == next) out[key] = value;
@@ -767,7 +781,8 @@ std::string resolvedWithDerived(const SceneDesc& scene, const DerivedValues& der
     nlohmann::ordered_json j = nlohmann::ordered_json::parse(scene.resolvedJson);
     const auto array = [](const Vec3d& v) { return nlohmann::ordered_json::array({v[0], v[1], v[2]}); };
     for (std::size_t i = 0; i < scene.sets.size() && i < derived.setPivot.size(); ++i)
-        if (derived.setPivot[i] && !scene.sets[i].pivotGiven) j["sets"][i] = withKey(j["sets"][i], "pivot", array(*derived.setPivot[i]), "velocity_field");
+        if (derived.setPivot[i] && !scene.sets[i].pivotGiven)
+            j["sets"][i] = withKey(j["sets"][i], "pivot", array(*derived.setPivot[i]), "velocity_field");
     for (std::size_t i = 0; i < scene.colliders.size() && i < derived.colliderPivot.size(); ++i) {
         if (const auto* mesh = std::get_if<MeshShape>(&scene.colliders[i].shape);
             mesh && mesh->voxelSize <= 0.0 && i < derived.colliderVoxel.size() && derived.colliderVoxel[i] > 0.0)

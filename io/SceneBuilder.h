@@ -61,9 +61,9 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene);
 /// The values the builder derives for keys a scene leaves to it (Key::derived): each collider's pivot (its
 /// centre) and so its keyframes' positions, a mesh collider's voxel, and each spinning set's pivot (its centroid).
 struct DerivedValues {
-    std::vector<Vec3d> colliderPivot;               ///< by collider
-    std::vector<double> colliderVoxel;              ///< by collider: its distance field's voxel (0: an analytic shape)
-    std::vector<std::optional<Vec3d>> setPivot;     ///< by set; none for a set that does not spin
+    std::vector<Vec3d> colliderPivot;            ///< by collider
+    std::vector<double> colliderVoxel;           ///< by collider: its distance field's voxel (0: an analytic shape)
+    std::vector<std::optional<Vec3d>> setPivot;  ///< by set; none for a set that does not spin
     /// What sceneWarnings would say of a set's start and a mesh collider's walls, found on the way (not the pairwise
     /// overlap of sets): a run prints them.
     std::vector<std::string> warnings;

@@ -30,8 +30,8 @@ struct ParticleSetDesc {
     Vec3f colour = Vec3f::Ones();           ///< Cd of its points (linear RGB); the material's unless given
     Vec3d angularVelocity = Vec3d::Zero();  ///< an initial rigid spin about the pivot [rad/s]
     Vec3d pivot = Vec3d::Zero();
-    bool pivotGiven = false;                ///< else: the centroid of the set's particles
-    std::string velocityFile;               ///< a VDB whose vector grid adds an initial velocity field
+    bool pivotGiven = false;   ///< else: the centroid of the set's particles
+    std::string velocityFile;  ///< a VDB whose vector grid adds an initial velocity field
     std::string velocityGrid = "vel";
     double particlesPerCell = 8.0;  ///< used unless count > 0
     long long count = 0;
@@ -67,21 +67,21 @@ struct ColliderDesc {
 
 struct OutputDesc {
     std::string directory = "out";
-    bool points = true;                ///< VDB PointDataGrid "points"
-    bool surface = true;               ///< narrow-band level set "surface"
-    bool density = false;              ///< fog volume "density"
-    bool velocity = false;             ///< vector grid "vel"
-    bool splitFiles = false;           ///< points in <scene>_points_NNNN.vdb, volumes in <scene>_NNNN.vdb
-    bool ply = false;                  ///< binary PLY per frame (Blender reads it)
-    bool initialFrame = false;         ///< also write the initial state as file 0000 (file N is the end of frame N)
-    double surfaceRadius = 1.0;        ///< sphere radius in particle spacings
+    bool points = true;          ///< VDB PointDataGrid "points"
+    bool surface = true;         ///< narrow-band level set "surface"
+    bool density = false;        ///< fog volume "density"
+    bool velocity = false;       ///< vector grid "vel"
+    bool splitFiles = false;     ///< points in <scene>_points_NNNN.vdb, volumes in <scene>_NNNN.vdb
+    bool ply = false;            ///< binary PLY per frame (Blender reads it)
+    bool initialFrame = false;   ///< also write the initial state as file 0000 (file N is the end of frame N)
+    double surfaceRadius = 1.0;  ///< sphere radius in particle spacings
     /// Closing of the surface, in particle spacings (voxels), and Gaussian passes between; the defaults are
     /// measured in tests/test_surface.cpp (no hole in a disordered bulk, a flat pool, a ball's area, thin sheets).
     double surfaceDilate = 2.0, surfaceErode = 2.0;
     int surfaceSmooth = 1;
-    std::string surfaceGroup = "all";  ///< all | material | set: one surface grid per group
+    std::string surfaceGroup = "all";     ///< all | material | set: one surface grid per group
     std::vector<std::string> attributes;  ///< extra point attributes (io/PointCloud.h PointAttributes::names)
-    int checkpointEvery = 1;           ///< frames between checkpoints; 0 = none
+    int checkpointEvery = 1;              ///< frames between checkpoints; 0 = none
     int checkpointsKept = 2;
     /// On several ranks: "gathered" (rank 0 writes each frame as one process does) or "per_rank" (each rank
     /// writes its own particles into part files <scene>_NNNN_rankRRR.vdb, nothing gathered).

@@ -61,29 +61,36 @@ void simulationKeys(V& v, SceneDesc& d) {
                  .lo = 0.0,
                  .hi = 1e6},
              s.rebalanceImbalance);
-    v.choice(Key{.name = "contact",
-                 .help = "bodies in contact: single_field (one velocity field, touching bodies move together there) or "
-                         "multi_field (a field per body, which bounce and part; a body is a set, or the sets sharing a `body` name)",
-                 .noun = "contact model"},
-             s.contact, std::span<const Named<ContactModel>>(kContactModels));
+    v.choice(
+        Key{.name = "contact",
+            .help = "bodies in contact: single_field (one velocity field, touching bodies move together there) or "
+                    "multi_field (a field per body, which bounce and part; a body is a set, or the sets sharing a `body` name)",
+            .noun = "contact model"},
+        s.contact, std::span<const Named<ContactModel>>(kContactModels));
     v.number(Key{.name = "contact_friction", .help = "Coulomb friction between bodies (multi_field)", .lo = 0.0, .hi = 100.0},
              s.contactFriction);
     v.choice(Key{.name = "wall_ghosts",
-                 .help = "nodes inside sticky and slip colliders: held at the wall's velocity, or mirror (on sticky and frictionless slip walls "
-                         "on the grid's lines or halfway between, such as axis-aligned planes and boxes: the nodes inside take the velocity mirrored from their image "
-                         "across the surface where that holds material resting on the wall, and the nodes before it their images' mass and "
-                         "stress impulse: no soft layer at the wall, second order for bodies held by it; material moving along the normal by "
-                         "over 0.1 cell a step (arriving, leaving) meets the held wall; tilted or curved walls and walls with friction stay "
+                 .help = "nodes inside sticky and slip colliders: held at the wall's velocity, or mirror (on sticky and "
+                         "frictionless slip walls "
+                         "on the grid's lines or halfway between, such as axis-aligned planes and boxes: the nodes inside take "
+                         "the velocity mirrored from their image "
+                         "across the surface where that holds material resting on the wall, and the nodes before it their "
+                         "images' mass and "
+                         "stress impulse: no soft layer at the wall, second order for bodies held by it; material moving along "
+                         "the normal by "
+                         "over 0.1 cell a step (arriving, leaving) meets the held wall; tilted or curved walls and walls with "
+                         "friction stay "
                          "held: as stable as held, see docs/validation/report.md)",
                  .noun = "wall ghosts"},
              s.wallGhosts, std::span<const Named<WallGhosts>>(kWallGhosts));
-    v.choice(Key{.name = "wall_contact",
-                 .help = "where `separate` colliders act: stencil (on every node inside them, as sticky and slip colliders do: a "
-                         "body arriving feels the wall from 1.5 cells away) or surface (once the material's surface, judged from the "
-                         "node's mass, reaches theirs: contact times as Hertz's, but material resting in a corner or against a wall "
-                         "below a free surface creeps into the wall, a water column a quarter cell a side, see docs/method.md)",
-                 .noun = "wall contact"},
-             s.wallContact, std::span<const Named<WallContact>>(kWallContacts));
+    v.choice(
+        Key{.name = "wall_contact",
+            .help = "where `separate` colliders act: stencil (on every node inside them, as sticky and slip colliders do: a "
+                    "body arriving feels the wall from 1.5 cells away) or surface (once the material's surface, judged from the "
+                    "node's mass, reaches theirs: contact times as Hertz's, but material resting in a corner or against a wall "
+                    "below a free surface creeps into the wall, a water column a quarter cell a side, see docs/method.md)",
+            .noun = "wall contact"},
+        s.wallContact, std::span<const Named<WallContact>>(kWallContacts));
     v.flag(Key{.name = "adaptive", .help = "apply the CFL bound (off: the fixed target dt)"}, s.adaptive);
     v.number(Key{.name = "max_displacement",
                  .help = "thesis rule: largest grid-node displacement per substep in cells; 0 = off",
@@ -113,7 +120,8 @@ void simulationKeys(V& v, SceneDesc& d) {
     v.integer(Key{.name = "max_substeps_per_frame",
                   .help = "watchdog: a scene whose frames would need more substeps fails validation, and a run stops at a frame "
                           "that would (instead of crawling on)",
-                  .lo = 1, .hi = 1e9},
+                  .lo = 1,
+                  .hi = 1e9},
               s.maxSubstepsPerFrame);
     v.integer(
         Key{.name = "retries",
@@ -128,7 +136,10 @@ void simulationKeys(V& v, SceneDesc& d) {
 template <class V>
 void outputKeys(V& v, OutputDesc& o) {
     v.text(Key{.name = "directory", .help = "where frames go (`-o` overrides)"}, o.directory);
-    v.flag(Key{.name = "points", .help = "VDB PointDataGrid `points`: P, v, id, material, set, pscale, Cd, the attributes asked for; groups material_<name>, set_<name>"}, o.points);
+    v.flag(Key{.name = "points",
+               .help = "VDB PointDataGrid `points`: P, v, id, material, set, pscale, Cd, the attributes asked for; groups "
+                       "material_<name>, set_<name>"},
+           o.points);
     v.flag(Key{.name = "surface", .help = "narrow-band level set `surface` from the particles"}, o.surface);
     v.flag(Key{.name = "density", .help = "fog volume `density` (from the surface)"}, o.density);
     v.flag(Key{.name = "velocity", .help = "vector grid `vel` (mean particle velocity per voxel)"}, o.velocity);
@@ -137,7 +148,10 @@ void outputKeys(V& v, OutputDesc& o) {
             .help =
                 "points in `<scene>_points_NNNN.vdb`, volumes in `<scene>_NNNN.vdb` (Blender and pyopenvdb cannot read points)"},
         o.splitFiles);
-    v.flag(Key{.name = "ply", .help = "binary PLY `<scene>_NNNN.ply`: x, y, z in double, vx, vy, vz, id, material, set, pscale, red, green, blue and the attributes asked for (Blender imports it)"}, o.ply);
+    v.flag(Key{.name = "ply",
+               .help = "binary PLY `<scene>_NNNN.ply`: x, y, z in double, vx, vy, vz, id, material, set, pscale, red, green, "
+                       "blue and the attributes asked for (Blender imports it)"},
+           o.ply);
     v.flag(Key{.name = "initial_frame",
                .help = "also write the initial state as file 0000; file N holds the state at the end of frame N, from 1, "
                        "as Blender and Houdini number frames"},
@@ -150,16 +164,22 @@ void outputKeys(V& v, OutputDesc& o) {
              o.surfaceRadius);
     v.number(Key{.name = "surface_dilate",
                  .help = "grow each surface outward by this much before smoothing (fills gaps between particles)",
-                 .lo = 0.0, .hi = 3.0, .unit = "particle spacings"},
+                 .lo = 0.0,
+                 .hi = 3.0,
+                 .unit = "particle spacings"},
              o.surfaceDilate);
-    v.integer(Key{.name = "surface_smooth", .help = "Gaussian smoothing passes after dilating", .lo = 0, .hi = 20}, o.surfaceSmooth);
+    v.integer(Key{.name = "surface_smooth", .help = "Gaussian smoothing passes after dilating", .lo = 0, .hi = 20},
+              o.surfaceSmooth);
     v.number(Key{.name = "surface_erode",
                  .help = "shrink each surface inward by this much after smoothing (back to the material)",
-                 .lo = 0.0, .hi = 3.0, .unit = "particle spacings"},
+                 .lo = 0.0,
+                 .hi = 3.0,
+                 .unit = "particle spacings"},
              o.surfaceErode);
     v.integer(Key{.name = "checkpoint_every",
                   .help = "write the whole simulation state every this many frames (`--resume` continues from it); 0 = never",
-                  .lo = 0, .hi = 1e9},
+                  .lo = 0,
+                  .hi = 1e9},
               o.checkpointEvery);
     v.integer(Key{.name = "checkpoints_kept", .help = "the newest checkpoints kept; older ones are removed", .lo = 1, .hi = 1000},
               o.checkpointsKept);
@@ -190,13 +210,17 @@ template <class V>
 void setKeys(V& v, ParticleSetDesc& d) {
     v.text(Key{.name = "name", .help = "unique name", .byDefault = "set<i>, i its index"}, d.name);
     v.choice(Key{.name = "material", .help = "material preset", .noun = "material"}, d.material, materialSceneNames());
-    v.text(Key{.name = "body", .help = "multi_field contact: sets with one body name share a velocity field", .byDefault = "the set's own"},
+    v.text(Key{.name = "body",
+               .help = "multi_field contact: sets with one body name share a velocity field",
+               .byDefault = "the set's own"},
            d.body);
     v.vec3(Key{.name = "velocity", .help = "initial velocity", .unit = "m/s"}, d.velocity);
     if (!v.given("color")) d.colour = defaultColour(d.material);
     v.vec3(Key{.name = "color", .help = "colour of its points (Cd, linear RGB 0..1)", .byDefault = "the material's"}, d.colour);
     v.check(d.colour.minCoeff() >= 0.0f && d.colour.maxCoeff() <= 1.0f, "color", "components must lie in 0 .. 1");
-    v.vec3(Key{.name = "angular_velocity", .help = "initial rigid spin about the pivot, added to velocity, right-handed", .unit = "rad/s"},
+    v.vec3(Key{.name = "angular_velocity",
+               .help = "initial rigid spin about the pivot, added to velocity, right-handed",
+               .unit = "rad/s"},
            d.angularVelocity);
     v.vec3(Key{.name = "pivot",
                .help = "centre of the spin; the resolved scene of a spinning set states the centroid it took",
@@ -219,7 +243,8 @@ void setKeys(V& v, ParticleSetDesc& d) {
              d.sampling, std::span<const Named<Sampling>>(kSamplings));
     std::string emission = d.continuous ? "continuous" : "copies";
     v.choice(Key{.name = "emission",
-                 .help = "copies: the whole shape at each emission frame; continuous: material flows in through a disc or rectangle at the "
+                 .help = "copies: the whole shape at each emission frame; continuous: material flows in through a disc or "
+                         "rectangle at the "
                          "set's velocity, substep by substep, from start_frame for duration frames",
                  .noun = "emission"},
              emission, std::vector<std::string>{"copies", "continuous"});
@@ -247,21 +272,30 @@ void motionKeys(V& v, MotionDesc& m) {
     v.vec3(Key{.name = "velocity", .help = "constant velocity", .unit = "m/s"}, m.velocity);
     v.vec3(Key{.name = "angular_velocity", .help = "constant angular velocity about the pivot, right-handed", .unit = "rad/s"},
            m.angularVelocity);
-    v.vec3(Key{.name = "pivot",
-               .help = "the point it turns about, and whose position keyframes give; the resolved scene states the centre it took",
-               .unit = "m",
-               .byDefault = "the collider's centre (a mesh's: its box's; a VDB's: the box of its inside voxels')",
-               .derived = true},
-           m.pivot);
+    v.vec3(
+        Key{.name = "pivot",
+            .help = "the point it turns about, and whose position keyframes give; the resolved scene states the centre it took",
+            .unit = "m",
+            .byDefault = "the collider's centre (a mesh's: its box's; a VDB's: the box of its inside voxels')",
+            .derived = true},
+        m.pivot);
     double previous = -std::numeric_limits<double>::infinity();
     v.list(Key{.name = "keyframes",
                .help = "poses by frame: position linear and rotation spherical linear between keys, held before the first and "
                        "after the last"},
            m.keyframes, [&](auto& k, KeyframeDesc& key) {
                key.positionGiven = k.given("position");
-               k.number(Key{.name = "frame", .help = "frame of this pose (fractional frames allowed)", .lo = -1e9, .hi = 1e9, .required = true},
+               k.number(Key{.name = "frame",
+                            .help = "frame of this pose (fractional frames allowed)",
+                            .lo = -1e9,
+                            .hi = 1e9,
+                            .required = true},
                         key.frame);
-               k.vec3(Key{.name = "position", .help = "where the pivot is", .unit = "m", .byDefault = "the pivot's rest position", .derived = true},
+               k.vec3(Key{.name = "position",
+                          .help = "where the pivot is",
+                          .unit = "m",
+                          .byDefault = "the pivot's rest position",
+                          .derived = true},
                       key.position);
                k.object(Key{.name = "rotation", .help = "turn from the rest placement about the pivot"},
                         [&](auto& r) { Rotation::keys(r, key.rotation); });

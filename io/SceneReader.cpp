@@ -79,8 +79,8 @@ public:
             if (!j->is_number()) fail(k.name, "expected a number, got " + quoted(*j));
             v = j->get<double>();
             if (!std::isfinite(v) || v < k.lo || v > k.hi)
-                fail(k.name, "value " + quoted(*j) + " out of range; allowed: " + formatNumber(k.lo) + " to " + formatNumber(k.hi) +
-                                 (k.unit.empty() ? "" : " " + std::string(k.unit)));
+                fail(k.name, "value " + quoted(*j) + " out of range; allowed: " + formatNumber(k.lo) + " to " +
+                                 formatNumber(k.hi) + (k.unit.empty() ? "" : " " + std::string(k.unit)));
         }
         out_[std::string(k.name)] = v;
         value = T(v);
@@ -90,9 +90,10 @@ public:
         long long v = static_cast<long long>(value);
         if (const json* j = take(k)) {
             // 1e6 is an integer too; 2^63 and more is out of range, and said so with its real value.
-            const bool whole = j->is_number_float() && std::isfinite(j->get<double>()) && std::floor(j->get<double>()) == j->get<double>();
+            const bool whole =
+                j->is_number_float() && std::isfinite(j->get<double>()) && std::floor(j->get<double>()) == j->get<double>();
             if (!j->is_number_integer() && !whole) fail(k.name, "expected an integer, got " + quoted(*j));
-            const double d = j->is_number_unsigned() ? double(j->get<uint64_t>())
+            const double d = j->is_number_unsigned()  ? double(j->get<uint64_t>())
                              : j->is_number_integer() ? double(j->get<long long>())
                                                       : j->get<double>();
             if (d < k.lo || d > k.hi)
@@ -148,7 +149,8 @@ public:
             for (const json& item : *j) {
                 if (!item.is_string() || std::find(allowed.begin(), allowed.end(), item.get<std::string>()) == allowed.end())
                     fail(k.name, "unknown " + std::string(k.noun) + " " + quoted(item) + "; known: " + joinNames(allowed));
-                if (std::find(values.begin(), values.end(), item.get<std::string>()) == values.end()) values.push_back(item.get<std::string>());
+                if (std::find(values.begin(), values.end(), item.get<std::string>()) == values.end())
+                    values.push_back(item.get<std::string>());
             }
         }
         out_[std::string(k.name)] = values;
@@ -281,12 +283,14 @@ SceneDesc loadScene(const std::string& path) {
     namespace fs = std::filesystem;
     std::error_code ec;
     const fs::file_status st = fs::status(path, ec);
-    if (ec || !fs::exists(st)) throw SceneError(path + ": cannot open the file: " + (ec ? ec.message() : "No such file or directory"));
+    if (ec || !fs::exists(st))
+        throw SceneError(path + ": cannot open the file: " + (ec ? ec.message() : "No such file or directory"));
     if (fs::is_directory(st)) throw SceneError(path + ": is a directory, not a scene file");
     if (!fs::is_regular_file(st)) throw SceneError(path + ": not a regular file");
     const std::uintmax_t size = fs::file_size(path, ec);
     if (!ec && size > kMaxSceneBytes)
-        throw SceneError(path + ": " + std::to_string(size) + " bytes; a scene file may have at most " + std::to_string(kMaxSceneBytes));
+        throw SceneError(path + ": " + std::to_string(size) + " bytes; a scene file may have at most " +
+                         std::to_string(kMaxSceneBytes));
     std::ifstream in(path, std::ios::binary);
     if (!in) throw SceneError(path + ": cannot open the file: " + std::strerror(errno));
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -318,7 +322,8 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
     if (doc.is_object() && doc.contains("scene_file")) {
         const json& source = doc["scene_file"];
         if (!source.is_string() || source.get<std::string>().empty())
-            throw SceneError(path + ": /scene_file: expected the path of the scene this one was resolved from, got " + quoted(source));
+            throw SceneError(path + ": /scene_file: expected the path of the scene this one was resolved from, got " +
+                             quoted(source));
         scene.file = source.get<std::string>();
         scene.name = std::filesystem::path(scene.file).stem().string();
         doc.erase("scene_file");

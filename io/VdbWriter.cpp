@@ -1,6 +1,5 @@
 #include "io/VdbWriter.h"
 
-#include <nlohmann/json.hpp>
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/points/PointConversion.h>
@@ -9,6 +8,7 @@
 #include <openvdb/points/PointRasterizeSDF.h>
 #include <openvdb/tools/LevelSetFilter.h>
 #include <openvdb/tools/LevelSetUtil.h>
+#include <nlohmann/json.hpp>
 
 #include <cctype>
 #include <map>
@@ -55,7 +55,8 @@ void addAttribute(PointDataGrid& grid, const openvdb::tools::PointIndexGrid& ind
 
 /// A point group name Houdini accepts (letters, digits and underscores) for a material or set name: other
 /// characters become underscores, and a clash with an earlier group gets the index appended.
-std::string groupName(const std::string& prefix, const std::string& name, std::size_t index, const std::map<std::string, std::string>& taken) {
+std::string groupName(const std::string& prefix, const std::string& name, std::size_t index,
+                      const std::map<std::string, std::string>& taken) {
     std::string g = prefix;
     for (char c : name) g += (std::isalnum(static_cast<unsigned char>(c)) || c == '_') ? c : '_';
     if (taken.count(g)) g += "_" + std::to_string(index);
@@ -64,8 +65,9 @@ std::string groupName(const std::string& prefix, const std::string& name, std::s
 
 /// One point group per material and per set present (`material_water`, `set_<name>`), and the map from each
 /// group to the name it stands for (stored as metadata: the names themselves may hold any string).
-std::map<std::string, std::string> addGroups(PointDataGrid& grid, const openvdb::tools::PointIndexGrid& index, const PointCloud& f,
-                                             const std::vector<std::string>& materialNames, const std::vector<std::string>& setNames) {
+std::map<std::string, std::string> addGroups(PointDataGrid& grid, const openvdb::tools::PointIndexGrid& index,
+                                             const PointCloud& f, const std::vector<std::string>& materialNames,
+                                             const std::vector<std::string>& setNames) {
     std::map<std::string, std::string> groups;
     auto add = [&](const char* prefix, const std::vector<std::string>& names, const std::vector<int32_t>& of) {
         std::vector<bool> present(names.size(), false);
@@ -233,9 +235,11 @@ PointsReadBack readVdbPoints(const std::string& path) {
         const auto pscale = optional("pscale"), J = optional("J"), Jp = optional("Jp"), stress = optional("stress_norm"),
                    plastic = optional("plastic_strain");
         std::unique_ptr<openvdb::points::AttributeHandle<openvdb::Vec3f>> Cd;
-        if (leaf->hasAttribute("Cd")) Cd = std::make_unique<openvdb::points::AttributeHandle<openvdb::Vec3f>>(leaf->constAttributeArray("Cd"));
+        if (leaf->hasAttribute("Cd"))
+            Cd = std::make_unique<openvdb::points::AttributeHandle<openvdb::Vec3f>>(leaf->constAttributeArray("Cd"));
         std::unique_ptr<openvdb::points::AttributeHandle<openvdb::math::Mat3s>> F;
-        if (leaf->hasAttribute("F")) F = std::make_unique<openvdb::points::AttributeHandle<openvdb::math::Mat3s>>(leaf->constAttributeArray("F"));
+        if (leaf->hasAttribute("F"))
+            F = std::make_unique<openvdb::points::AttributeHandle<openvdb::math::Mat3s>>(leaf->constAttributeArray("F"));
         std::vector<std::pair<std::vector<bool>*, openvdb::points::GroupHandle>> groups;
         for (auto& [group, members] : out.groups)
             if (leaf->attributeSet().descriptor().hasGroup(group)) groups.emplace_back(&members, leaf->groupHandle(group));

@@ -44,8 +44,8 @@ struct PointsReadBack {
     std::vector<Vec3f> Cd;
     std::vector<Mat3f> F;
     std::vector<std::string> materialNames, setNames;  ///< from the grid's metadata
-    std::map<std::string, std::string> groupNames;      ///< point group -> the material or set name it stands for
-    std::map<std::string, std::vector<bool>> groups;    ///< point group -> membership, point by point
+    std::map<std::string, std::string> groupNames;     ///< point group -> the material or set name it stands for
+    std::map<std::string, std::vector<bool>> groups;   ///< point group -> membership, point by point
 };
 PointsReadBack readVdbPoints(const std::string& path);
 

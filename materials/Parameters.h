@@ -73,8 +73,12 @@ struct KeyVisitorArchetype {
     void choices(const Key&, std::vector<std::string>&, const std::vector<std::string>&) {}
     void check(bool, std::string_view, const std::string&) {}
     bool given(std::string_view) { return false; }
-    template <class F> void object(const Key&, F&& f) { f(*this); }
-    template <class T, class F> void list(const Key&, std::vector<T>& items, F&& f) {
+    template <class F>
+    void object(const Key&, F&& f) {
+        f(*this);
+    }
+    template <class T, class F>
+    void list(const Key&, std::vector<T>& items, F&& f) {
         for (T& item : items) f(*this, item);
     }
 };

@@ -22,7 +22,8 @@ struct VonMises {
     static constexpr const char* kName = "von_mises";
     static constexpr const char* kSceneName = "metal";
     static constexpr const char* kSummary =
-        "metal: von Mises plasticity with linear isotropic hardening on Hencky elasticity (Simo 1992; Simo and Hughes 1998, Box 3.2)";
+        "metal: von Mises plasticity with linear isotropic hardening on Hencky elasticity (Simo 1992; Simo and Hughes 1998, Box "
+        "3.2)";
     static constexpr int kDim = 3;
     /// Aluminium alloy 6061-T6: E 68.9 GPa, nu 0.33, rho 2700 kg/m^3, yield stress 276 MPa; the hardening modulus
     /// is the mean slope from yield to the ultimate stress of 310 MPa at about 12% strain (ASM handbook values).
@@ -58,10 +59,17 @@ struct VonMises {
     template <class V>
     static void keys(V& v, Params& p) {
         elasticKeys(v, p.density, p.mu, p.lambda, kElastic);
-        v.number(Key{.name = "yield_stress", .help = "von Mises yield stress sigma_y (uniaxial)", .lo = kTiny, .hi = kHuge, .unit = "Pa"},
+        v.number(Key{.name = "yield_stress",
+                     .help = "von Mises yield stress sigma_y (uniaxial)",
+                     .lo = kTiny,
+                     .hi = kHuge,
+                     .unit = "Pa"},
                  p.yieldStress);
-        v.number(Key{.name = "hardening", .help = "linear isotropic hardening modulus H: sigma_y grows by H per unit plastic strain", .lo = 0.0,
-                     .hi = kHuge, .unit = "Pa"},
+        v.number(Key{.name = "hardening",
+                     .help = "linear isotropic hardening modulus H: sigma_y grows by H per unit plastic strain",
+                     .lo = 0.0,
+                     .hi = kHuge,
+                     .unit = "Pa"},
                  p.hardening);
     }
     static void scaleStiffness(Params& p, double lambdaScale, double muScale) { scaleLame(p.mu, p.lambda, lambdaScale, muScale); }
@@ -87,7 +95,9 @@ struct VonMises {
         const Vec3f t = 2.0f * mu * e + Vec3f::Constant(lambda * e.sum());
         return d.U * t.asDiagonal() * d.U.transpose();
     }
-    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return henckyTau(m.mu, m.lambda, svd3<float>(s.Fe[i])); }
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
+        return henckyTau(m.mu, m.lambda, svd3<float>(s.Fe[i]));
+    }
     static void kirchhoffBatch(const Params& m, const State& s, std::size_t first, int n, Mat3f* tau) {
         Svd3<float> d[simd::kLanes];
         svd3Batch(&s.Fe[first], n, d);

@@ -193,7 +193,8 @@ PYBIND11_MODULE(sparse_mpm, m) {
         .def("advance", &PySimulation::advance, py::arg("frames") = 1, "Simulates frames; returns the last one's statistics.")
         .def("particles", &PySimulation::particles, "Every particle now: the dict read_frame returns, all attributes included.")
         .def("stats", &PySimulation::stats, "Statistics of the state now (mass, momentum, energies, ...).")
-        .def("set_velocities", &PySimulation::setVelocities, py::arg("v"), "Sets every particle's velocity, in particles()' order.")
+        .def("set_velocities", &PySimulation::setVelocities, py::arg("v"),
+             "Sets every particle's velocity, in particles()' order.")
         .def_property_readonly("frame", &PySimulation::frame)
         .def_property_readonly("time", &PySimulation::time)
         .def_property_readonly("material_names", &PySimulation::materialNames)

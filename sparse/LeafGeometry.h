@@ -134,6 +134,8 @@ inline bool mortonLess(const Vec3i& a, const Vec3i& b) {
 }
 
 /// Lexicographic order of node coordinates: for sorted lists of nodes looked up by binary search.
-inline bool nodeLess(const Vec3i& a, const Vec3i& b) { return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3); }
+inline bool nodeLess(const Vec3i& a, const Vec3i& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+}
 
 }  // namespace mpm

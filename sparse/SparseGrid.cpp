@@ -143,7 +143,9 @@ void SparseGrid::addReachedLeaves(const std::vector<Vec3i>& leafCoords) {
     for (const Vec3i& c : leafCoords) all.setValueOn(toCoord(c));
 }
 
-uint32_t SparseGrid::indexOfLeaf(const Vec3i& leafCoord) const { return uint32_t(trees_->leafIndex->getValue(toCoord(leafCoord))); }
+uint32_t SparseGrid::indexOfLeaf(const Vec3i& leafCoord) const {
+    return uint32_t(trees_->leafIndex->getValue(toCoord(leafCoord)));
+}
 
 void SparseGrid::allocateLeaves() {
     Trees& t = *trees_;
@@ -311,8 +313,8 @@ std::size_t SparseGrid::memoryBytes() const {
 std::size_t SparseGrid::bytesPerLeaf() {
     // A leaf node holds its values in a buffer of its own: 512 masses and 512 momenta beside the node.
     return sizeof(MassTree::LeafNodeType) + sizeof(MomentumTree::LeafNodeType) + MassTree::LeafNodeType::SIZE * sizeof(float) +
-           MomentumTree::LeafNodeType::SIZE * sizeof(openvdb::Vec3s) + sizeof(LeafView) + 2 * sizeof(std::array<uint32_t, kNeighbours>) +
-           2 * sizeof(NodeBox);
+           MomentumTree::LeafNodeType::SIZE * sizeof(openvdb::Vec3s) + sizeof(LeafView) +
+           2 * sizeof(std::array<uint32_t, kNeighbours>) + 2 * sizeof(NodeBox);
 }
 
 std::size_t SparseGrid::contentBytes() const {

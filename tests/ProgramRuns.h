@@ -1,7 +1,7 @@
 #pragma once
 // Running the mpm program as a user does, and comparing what two runs wrote (the safety and rank tests).
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -97,8 +97,10 @@ inline void expectSameOutput(const std::string& a, const std::string& b, const s
         const std::string other = b + "/" + name;
         if (name.rfind(scene + "_", 0) != 0 || name.find("checkpoint") != std::string::npos) continue;
         ASSERT_TRUE(fs::exists(other)) << other;
-        if (e.path().extension() == ".vdb") EXPECT_EQ(vdbWithoutUuid(e.path().string()), vdbWithoutUuid(other)) << name;
-        else EXPECT_EQ(readFile(e.path().string()), readFile(other)) << name;
+        if (e.path().extension() == ".vdb")
+            EXPECT_EQ(vdbWithoutUuid(e.path().string()), vdbWithoutUuid(other)) << name;
+        else
+            EXPECT_EQ(readFile(e.path().string()), readFile(other)) << name;
         ++compared;
     }
     EXPECT_GE(compared, atLeast);

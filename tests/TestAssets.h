@@ -13,12 +13,12 @@ namespace mpm::test {
 /// An icosphere of radius r about c, subdivided `levels` times (20 * 4^levels triangles), as OBJ text.
 inline std::string icosphereObj(const Vec3d& c, double r, int levels) {
     const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-    std::vector<Vec3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                            {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    std::vector<Vec3d> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                            {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
     for (Vec3d& p : v) p.normalize();
-    std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+    std::vector<Eigen::Vector3i> f = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
                                       {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                                      {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+                                      {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
     for (int l = 0; l < levels; ++l) {
         std::map<std::pair<int, int>, int> mid;
         auto middle = [&](int a, int b) {
@@ -56,8 +56,11 @@ inline std::string cupObj(double a, double h, double w) {
     const double b = a - w;
     // Outer box without top (normals out), inner box without top (normals into the cavity), rim.
     auto box = [&](double s, double y0, double y1, bool flip) {
-        const Vec3d c[8] = {{-s, y0, -s}, {s, y0, -s}, {s, y0, s}, {-s, y0, s}, {-s, y1, -s}, {s, y1, -s}, {s, y1, s}, {-s, y1, s}};
-        auto q = [&](int i0, int i1, int i2, int i3) { flip ? quad(c[i3], c[i2], c[i1], c[i0]) : quad(c[i0], c[i1], c[i2], c[i3]); };
+        const Vec3d c[8] = {{-s, y0, -s}, {s, y0, -s}, {s, y0, s}, {-s, y0, s},
+                            {-s, y1, -s}, {s, y1, -s}, {s, y1, s}, {-s, y1, s}};
+        auto q = [&](int i0, int i1, int i2, int i3) {
+            flip ? quad(c[i3], c[i2], c[i1], c[i0]) : quad(c[i0], c[i1], c[i2], c[i3]);
+        };
         q(0, 1, 2, 3);  // floor, facing down
         q(0, 4, 5, 1);
         q(1, 5, 6, 2);

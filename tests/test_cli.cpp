@@ -2,8 +2,8 @@
 // reported instead of written to disk.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <sys/wait.h>
+#include <chrono>
 
 #include <cstdlib>
 #include <filesystem>
@@ -348,7 +348,8 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     // A scene whose name makes its frames' names too long for the file system fails before it runs, not at its first frame.
     const std::string longName = std::string(240, 'n') + ".json";
     const Result tooLong = runMpm("run " + sceneFile(longName, R"({"simulation": {"frames": 2, "dx": 0.05},
-        "sets": [{"shape": {"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}}]})") + " -o " + scene + "_long");
+        "sets": [{"shape": {"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}}]})") +
+                                  " -o " + scene + "_long");
     EXPECT_EQ(tooLong.code, 2);
     EXPECT_NE(tooLong.output.find("the scene's name (its file's, 240 characters) makes file names of up to"), std::string::npos)
         << tooLong.output;

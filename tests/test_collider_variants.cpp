@@ -60,7 +60,8 @@ json platformScene(bool keyframes, double blockSpeed) {
         "colliders": [{"type": "box", "min": [-0.6, -0.1, -0.6], "max": [0.6, 0.0, 0.6], "boundary": "sticky"}]})");
     scene["sets"][0]["velocity"] = {blockSpeed, 0.0, 0.0};
     scene["colliders"][0]["motion"] =
-        keyframes ? json::parse(R"({"keyframes": [{"frame": 0, "position": [0, -0.05, 0]}, {"frame": 240, "position": [10, -0.05, 0]}]})")
+        keyframes ? json::parse(
+                        R"({"keyframes": [{"frame": 0, "position": [0, -0.05, 0]}, {"frame": 240, "position": [10, -0.05, 0]}]})")
                   : json::parse(R"({"velocity": [1, 0, 0]})");
     return scene;
 }
@@ -101,7 +102,8 @@ TEST(MovingCollider, ACarriedBodysVelocityIsItsDisplacementOverTime) {
                 const Mean now = meanOf(*sim, m);
                 const Vec3d displacementRate = (now.x - before.x) * 24.0;
                 EXPECT_NEAR(now.v[0], 1.0, 0.02) << m.name << (keyframes ? " keyframes" : " velocity") << " frame " << f + 1;
-                EXPECT_NEAR(displacementRate[0], 1.0, 0.02) << m.name << (keyframes ? " keyframes" : " velocity") << " frame " << f + 1;
+                EXPECT_NEAR(displacementRate[0], 1.0, 0.02)
+                    << m.name << (keyframes ? " keyframes" : " velocity") << " frame " << f + 1;
                 EXPECT_NEAR(now.v[0], displacementRate[0], 0.02) << m.name << " frame " << f + 1;
                 before = now;
             }
@@ -121,7 +123,8 @@ json sphereScene(const json& collider, double offsetX) {
 }
 
 void writeSphere(const std::string& path, double radius, double voxel) {
-    auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(radius), openvdb::Vec3f(0, 0, 0), float(voxel), 3.0f);
+    auto sphere =
+        openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(radius), openvdb::Vec3f(0, 0, 0), float(voxel), 3.0f);
     sphere->setName("surface");
     openvdb::io::File(path).write({sphere});
 }

@@ -1,9 +1,9 @@
 // Multi-body contact (simulation.contact = "multi_field", core/MultiField.h): bodies with velocity fields of their
 // own bounce and part, conserve momentum, slide on each other with Coulomb friction, and keep their bits across
 // thread counts.
-#include <cmath>
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <cmath>
 
 #include <cstring>
 
@@ -138,7 +138,8 @@ TEST(WallGhosts, ABodyArrivingAtAMirroredStickyWallStaysStable) {
     // ends inside it, and the energy left is that of the held floor's run within 5%.
     auto run = [](const char* ghosts) {
         SceneDesc scene = parseScene(std::string(R"({
-          "simulation": { "dx": 0.02, "substeps": 10, "frames": 12, "retries": 0, "wall_ghosts": ")") + ghosts + R"(" },
+          "simulation": { "dx": 0.02, "substeps": 10, "frames": 12, "retries": 0, "wall_ghosts": ")") +
+                                         ghosts + R"(" },
           "sets": [ { "name": "cube", "material": "jelly", "velocity": [0, -3, 0],
                       "shape": { "type": "box", "min": [-0.1, 0.05, -0.1], "max": [0.1, 0.25, 0.1] } } ],
           "colliders": [ { "type": "plane", "boundary": "sticky" } ] })",
@@ -179,7 +180,8 @@ TEST(WallGhosts, SandRestingInATiltedTroughIsAsCalmMirroredAsHeld) {
     // nodes (no scatter to match) fed energy into the resting sand until a hopper blew up.
     auto run = [](const char* ghosts) {
         SceneDesc scene = parseScene(std::string(R"({
-          "simulation": { "dx": 0.02, "substeps": 4, "frames": 6, "retries": 0, "wall_ghosts": ")") + ghosts + R"(" },
+          "simulation": { "dx": 0.02, "substeps": 4, "frames": 6, "retries": 0, "wall_ghosts": ")") +
+                                         ghosts + R"(" },
           "sets": [ { "name": "sand", "material": "sand",
                       "shape": { "type": "box", "min": [-0.1, 0.2, -0.03], "max": [0.1, 0.4, 0.03] } } ],
           "colliders": [ { "type": "plane", "normal": [0.866025, 0.5, 0], "boundary": "slip", "friction": 0.3 },

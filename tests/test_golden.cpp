@@ -129,7 +129,8 @@ TEST_P(Golden, ParticleArraysKeepTheirBits) {
 #ifdef MPM_GOLDEN_BUILD
     EXPECT_EQ(all, g.hash) << "particle arrays of " << g.name << " changed";
 #else
-    std::printf("golden %s: hashes are recorded for GCC Release x86-64-v3 builds; this build checks thread counts only\n", g.name);
+    std::printf("golden %s: hashes are recorded for GCC Release x86-64-v3 builds; this build checks thread counts only\n",
+                g.name);
 #endif
 }
 

@@ -36,7 +36,8 @@ const std::string kScene = std::string(MPM_SOURCE_DIR) + "/tests/scenes/ranks_mi
 /// mpm on `ranks` processes (mpirun on loopback; root allowed, as in CI; more ranks than cores allowed; not
 /// bound to a core each, so that a rank's threads are threads).
 Result runRanks(int ranks, std::vector<std::string> args, const std::string& dir) {
-    std::vector<std::string> all{"--allow-run-as-root", "--oversubscribe", "--bind-to", "none", "-np", std::to_string(ranks), MPM_BINARY};
+    std::vector<std::string> all{"--allow-run-as-root", "--oversubscribe", "--bind-to", "none", "-np",
+                                 std::to_string(ranks), MPM_BINARY};
     all.insert(all.end(), args.begin(), args.end());
     Child c = start(all, dir + "/mpirun.log", kMpiexec);
     const int code = c.wait();
@@ -52,7 +53,8 @@ std::pair<long, long> spread(const std::string& log) {
 /// The most set samples a rank held after sampling, and the sets' samples in all.
 std::pair<double, double> heldSamples(const std::string& log) {
     std::smatch m;
-    if (!std::regex_search(log, m, std::regex(R"(at most ([0-9]+) of the sets' ([0-9]+) samples held by a rank)"))) return {-1, -1};
+    if (!std::regex_search(log, m, std::regex(R"(at most ([0-9]+) of the sets' ([0-9]+) samples held by a rank)")))
+        return {-1, -1};
     return {std::stod(m[1]), std::stod(m[2])};
 }
 int recuts(const std::string& log) {
@@ -202,7 +204,8 @@ TEST(Ranks, CheckpointPartsOfTwoRanksResumeOnThreeAndOnOneWithTheBitsOfAnUninter
         const std::vector<std::string> args{"run", kScene, "-o", resumed, "--resume", "--threads", "1"};
         const Result r = ranks > 1 ? runRanks(ranks, args, dir) : runMpm(args, dir);
         ASSERT_EQ(r.code, 0) << r.output;
-        EXPECT_NE(r.output.find("continuing from " + resumed + "/ranks_mix_checkpoint_0003_rank*.mpmc"), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find("continuing from " + resumed + "/ranks_mix_checkpoint_0003_rank*.mpmc"), std::string::npos)
+            << r.output;
         expectSameOutput(resumed, dir + "/one", "ranks_mix", 9);
     }
     // A set missing a part is not used: named, and the run has nothing else to resume from.
@@ -288,7 +291,8 @@ TEST(Ranks, PerRankPartFilesHoldEveryParticleOnceWithTheBitsOfTheWholeFrame) {
             std::snprintf(name, sizeof name, "/parts_points_%04d_rank%03d.vdb", f, part);
             const mpm::PointsReadBack p = mpm::readVdbPoints(dir + "/three" + name);
             EXPECT_GT(p.id.size(), 0u) << name;
-            for (std::size_t i = 0; i < p.id.size(); ++i) EXPECT_TRUE(byId.emplace(p.id[i], std::pair{p.x[i], p.v[i]}).second) << p.id[i];
+            for (std::size_t i = 0; i < p.id.size(); ++i)
+                EXPECT_TRUE(byId.emplace(p.id[i], std::pair{p.x[i], p.v[i]}).second) << p.id[i];
         }
         ASSERT_EQ(byId.size(), whole.id.size()) << "frame " << f;
         for (std::size_t i = 0; i < whole.id.size(); ++i) {
@@ -309,8 +313,19 @@ TEST(Ranks, SigusrOneStopsEveryRankAtOneSubstepAndTheRunResumesOnThreeRanks) {
     ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/one", "--quiet"}, dir).code, 0);
     // OpenMPI forwards SIGUSR1 to every rank (SIGINT and SIGTERM make mpirun kill them within a second).
     const std::string out = dir + "/stopped";
-    std::vector<std::string> args{"--allow-run-as-root", "--oversubscribe", "--bind-to", "none", "-np", "2", MPM_BINARY,
-                                  "run", scene, "-o", out, "--threads", "1"};
+    std::vector<std::string> args{"--allow-run-as-root",
+                                  "--oversubscribe",
+                                  "--bind-to",
+                                  "none",
+                                  "-np",
+                                  "2",
+                                  MPM_BINARY,
+                                  "run",
+                                  scene,
+                                  "-o",
+                                  out,
+                                  "--threads",
+                                  "1"};
     Child c = start(args, dir + "/mpirun.log", kMpiexec);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
     while (!fs::exists(out + "/ranks_mix_checkpoint_0003.mpmc") && std::chrono::steady_clock::now() < deadline)

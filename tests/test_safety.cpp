@@ -2,8 +2,8 @@
 // --resume, a full disk, two runs into one directory, a scene whose name starts with another's, corrupt
 // checkpoints, changed scenes, and every hostile-input failure found so far as a regression case with its
 // exit code and message.
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/mount.h>
 #include <sys/wait.h>
@@ -11,8 +11,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstring>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -21,13 +21,13 @@
 #include <sstream>
 #include <thread>
 
+#include "ProgramRuns.h"
 #include "io/Checkpoint.h"
 #include "io/Output.h"
 #include "io/PointFile.h"
 #include "io/SceneBuilder.h"
 #include "io/SceneReader.h"
 #include "io/VdbWriter.h"
-#include "ProgramRuns.h"
 
 namespace fs = std::filesystem;
 using namespace mpm;
@@ -43,7 +43,6 @@ const char* kScene = R"({
             { "name": "j", "material": "jelly", "shape": { "type": "sphere", "center": [0.5, 0.4, 0.1], "radius": 0.09 },
               "velocity": [-1, 0, 0], "start_frame": 2, "duration": 6, "pause": 2 } ],
   "colliders": [ { "type": "plane", "boundary": "slip", "friction": 0.3 }, { "type": "plane", "normal": [1, 0, 0] } ] })";
-
 
 bool hasCheckpoint(const std::string& dir) {
     std::error_code ec;
@@ -69,7 +68,8 @@ TEST(Safety, KilledRunsResumeWithTheBitsOfAnUninterruptedRun) {
             ::kill(c.pid, SIGKILL);
             c.wait();
             // Resume with the other thread count: bits do not depend on it.
-            const Result r = runMpm({"run", scene, "-o", out, "--resume", "--threads", std::string(threads) == "1" ? "2" : "1"}, dir);
+            const Result r =
+                runMpm({"run", scene, "-o", out, "--resume", "--threads", std::string(threads) == "1" ? "2" : "1"}, dir);
             ASSERT_EQ(r.code, 0) << r.output;
             EXPECT_NE(r.output.find("took over the lock"), std::string::npos) << r.output;
             expectSameOutput(dir + "/ref", out, "flow");
@@ -84,7 +84,8 @@ TEST(Safety, KilledRunsResumeWithTheBitsOfAnUninterruptedRun) {
     if (!hasCheckpoint(early)) {
         const Result resume = runMpm({"run", scene, "-o", early, "--resume"}, dir);
         EXPECT_EQ(resume.code, 2) << resume.output;
-        EXPECT_NE(resume.output.find("no usable checkpoint of scene flow to resume from; run without --resume"), std::string::npos)
+        EXPECT_NE(resume.output.find("no usable checkpoint of scene flow to resume from; run without --resume"),
+                  std::string::npos)
             << resume.output;
     }
     const Result fresh = runMpm({"run", scene, "-o", early}, dir);
@@ -105,7 +106,8 @@ TEST(Safety, SignalsStopAtASubstepWithACheckpointAndTheRunResumes) {
         EXPECT_EQ(c.wait(), code);
         const std::string said = c.output();
         EXPECT_NE(said.find("resume with: mpm run " + scene + " -o " + out + " --resume"), std::string::npos) << said;
-        for (const auto& e : fs::directory_iterator(out)) EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+        for (const auto& e : fs::directory_iterator(out))
+            EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
         const Result r = runMpm({"run", scene, "-o", out, "--resume", "--quiet"}, dir);
         ASSERT_EQ(r.code, 0) << r.output;
         expectSameOutput(dir + "/ref", out, "flow");
@@ -129,7 +131,8 @@ TEST(Safety, SignalsStopAtASubstepWithACheckpointAndTheRunResumes) {
     // Resuming a run that has finished says so and runs nothing.
     const Result done = runMpm({"run", scene, "-o", early, "--resume"}, dir);
     EXPECT_EQ(done.code, 0);
-    EXPECT_NE(done.output.find("all 14 frames of " + scene + " are done in " + early + "; nothing to run"), std::string::npos) << done.output;
+    EXPECT_NE(done.output.find("all 14 frames of " + scene + " are done in " + early + "; nothing to run"), std::string::npos)
+        << done.output;
     // A second Ctrl-C while the first is being served ends the run at once, and removes the directory's lock file
     // (left behind, the next run took it over with a warning).
     const std::string twice = dir + "/twice";
@@ -203,10 +206,16 @@ TEST(Safety, CheckpointReadsBackBitForBit) {
     for (std::size_t s = 0; s < a.species.size(); ++s) {
         ASSERT_EQ(a.species[s].index(), b.species[s].index());
         std::vector<std::string> arraysA, arraysB;
-        std::visit([&](const auto& sp) { sp.forEachArray([&](const auto& v) { arraysA.emplace_back((const char*)v.data(), v.size() * sizeof(v[0])); }); },
-                   a.species[s]);
-        std::visit([&](const auto& sp) { sp.forEachArray([&](const auto& v) { arraysB.emplace_back((const char*)v.data(), v.size() * sizeof(v[0])); }); },
-                   b.species[s]);
+        std::visit(
+            [&](const auto& sp) {
+                sp.forEachArray([&](const auto& v) { arraysA.emplace_back((const char*)v.data(), v.size() * sizeof(v[0])); });
+            },
+            a.species[s]);
+        std::visit(
+            [&](const auto& sp) {
+                sp.forEachArray([&](const auto& v) { arraysB.emplace_back((const char*)v.data(), v.size() * sizeof(v[0])); });
+            },
+            b.species[s]);
         EXPECT_EQ(arraysA, arraysB);
     }
     // Any flipped byte is found, and a truncated file too.
@@ -266,8 +275,10 @@ TEST(Safety, FramesAToBDeleteNothingElseAndStartFromACheckpoint) {
     ASSERT_EQ(after.size(), 15u);
     const std::map<int, std::string> ref = statsRows(statsWithoutWallTime(dir + "/ref/stats.csv"));
     for (const auto& [frame, row] : after) {
-        if (frame == 5 || frame == 6) EXPECT_EQ(row.substr(0, row.rfind(',')), ref.at(frame)) << frame;
-        else EXPECT_EQ(row, before.at(frame)) << frame;
+        if (frame == 5 || frame == 6)
+            EXPECT_EQ(row.substr(0, row.rfind(',')), ref.at(frame)) << frame;
+        else
+            EXPECT_EQ(row, before.at(frame)) << frame;
     }
     EXPECT_EQ(readFile(dir + "/out/flow_0009.vdb"), frame9);
     std::vector<std::string> checkpoints;
@@ -385,14 +396,17 @@ TEST(Safety, AFullDiskFailsNamingTheFileAndKeepsEveryFileWhole) {
         const int mid = (lo + hi) / 8 * 4;
         const std::string kind = fillDisk(dir, scene, mid);
         met.insert(kind);
-        if (kind == "vdb" || kind == "ply") lo = mid;
-        else hi = mid;
+        if (kind == "vdb" || kind == "ply")
+            lo = mid;
+        else
+            hi = mid;
         if (kind == "stats.csv") break;
     }
     // One page past the disk that fills in stats.csv, the checkpoint written next is the one that does not fit.
     met.insert(fillDisk(dir, scene, hi));
     met.insert(fillDisk(dir, scene, hi + 4));
-    for (const char* kind : {"vdb", "ply", "stats.csv", "mpmc"}) EXPECT_TRUE(met.count(kind)) << "no disk filled in a " << kind << " file";
+    for (const char* kind : {"vdb", "ply", "stats.csv", "mpmc"})
+        EXPECT_TRUE(met.count(kind)) << "no disk filled in a " << kind << " file";
 }
 
 namespace {
@@ -406,28 +420,31 @@ struct BadCase {
 std::string nested(int depth) { return std::string(std::size_t(depth), '[') + std::string(std::size_t(depth), ']'); }
 
 std::string waterScene(const std::string& simulation, const std::string& set, const std::string& params = "{}") {
-    return R"({"simulation": {)" + simulation + R"(}, "sets": [{"material": "water", "material_params": )" + params + R"(, )" + set +
-           R"(}]})";
+    return R"({"simulation": {)" + simulation + R"(}, "sets": [{"material": "water", "material_params": )" + params + R"(, )" +
+           set + R"(}]})";
 }
 }  // namespace
 
 TEST(Safety, HostileScenesGetANamedErrorAndExitTwo) {
     const std::string box = R"("shape": {"type": "box", "min": [0, 0, 0], "max": [0.2, 0.2, 0.2]})";
     const std::vector<BadCase> cases = {
-        {"deep nesting in a printed value", R"({"simulation": {"frames": )" + nested(100000) + "}}", 2, "nested deeper than 64 levels"},
+        {"deep nesting in a printed value", R"({"simulation": {"frames": )" + nested(100000) + "}}", 2,
+         "nested deeper than 64 levels"},
         {"deep nesting anywhere", nested(1000000), 2, "nested deeper than 64 levels"},
         {"a number past double", R"({"simulation": {"dx": 1e400}})", 2, "bad.json: not valid JSON: a number is out of range"},
         {"truncated", R"({"simulation": {"dx": 0.)", 2, "bad.json: not valid JSON: parse error at line 1, column"},
         {"invalid UTF-8", "{\"sets\": [{\"name\": \"\xff\xfe\"}]}", 2, "bad.json: not valid JSON"},
         {"2^63 as an integer", R"({"simulation": {"frames": 9223372036854775808}})", 2,
          "/simulation/frames: value 9223372036854775808 out of range"},
-        {"a set beyond the grid's range", waterScene(R"("dx": 0.02)", R"("shape": {"type": "sphere", "center": [1e8, 0, 0], "radius": 0.1})"),
-         2, "/sets/0/shape: lies 1e+08 m from the origin, beyond the grid's coordinate range"},
-        {"a particle at 1e30 m/s", waterScene(R"("dx": 0.05)", box + R"(, "velocity": [1e30, 0, 0])"), 2,
-         "substeps each (dt = "},
-        {"density 1e-12", waterScene(R"("dx": 0.05)", box, R"({"density": 1e-12})"), 2, "the limit is simulation.max_substeps_per_frame"},
+        {"a set beyond the grid's range",
+         waterScene(R"("dx": 0.02)", R"("shape": {"type": "sphere", "center": [1e8, 0, 0], "radius": 0.1})"), 2,
+         "/sets/0/shape: lies 1e+08 m from the origin, beyond the grid's coordinate range"},
+        {"a particle at 1e30 m/s", waterScene(R"("dx": 0.05)", box + R"(, "velocity": [1e30, 0, 0])"), 2, "substeps each (dt = "},
+        {"density 1e-12", waterScene(R"("dx": 0.05)", box, R"({"density": 1e-12})"), 2,
+         "the limit is simulation.max_substeps_per_frame"},
         {"bulk modulus 1e12", waterScene(R"("dx": 0.05)", box, R"({"bulk_modulus": 1e12})"), 2, "wave speed"},
-        {"1e6 substeps per frame", waterScene(R"("dx": 0.05, "substeps": 1000000)", box), 2, "/simulation/substeps: frames would need"},
+        {"1e6 substeps per frame", waterScene(R"("dx": 0.05, "substeps": 1000000)", box), 2,
+         "/simulation/substeps: frames would need"},
         {"2e9 particles", waterScene(R"("dx": 0.05)", box + R"(, "count": 2000000000)"), 2, "/sets: the run needs about"},
         // The key quoted as any value is: cut to 80 characters (a 1 MB key made a 1 MB message).
         {"a 1 MB unknown key", R"({"simulation": {")" + std::string(1 << 20, 'k') + R"(": 1}})", 2,
@@ -443,8 +460,9 @@ TEST(Safety, HostileScenesGetANamedErrorAndExitTwo) {
         EXPECT_LT(r.output.size(), 4000u) << c.what << ": a message to read, not the scene again";
     }
     // E = 1e15 for a solid, as the set's own material.
-    const std::string stiff = R"({"simulation": {"dx": 0.05}, "sets": [{"material": "jelly", "material_params": {"youngs_modulus": 1e15}, )" +
-                              box + "}]}";
+    const std::string stiff =
+        R"({"simulation": {"dx": 0.05}, "sets": [{"material": "jelly", "material_params": {"youngs_modulus": 1e15}, )" + box +
+        "}]}";
     const Result r = runMpm({"validate", writeFile(dir + "/stiff.json", stiff)}, dir);
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("stiff.json: /simulation: frames would need about"), std::string::npos) << r.output;
@@ -453,7 +471,8 @@ TEST(Safety, HostileScenesGetANamedErrorAndExitTwo) {
     EXPECT_EQ(d.code, 2);
     EXPECT_NE(d.output.find(dir + ": is a directory, not a scene file"), std::string::npos) << d.output;
     // 1e6 is an integer.
-    const Result ok = runMpm({"validate", "--print-scene", writeFile(dir + "/ok.json", waterScene(R"("frames": 1e2, "dx": 0.05)", box))}, dir);
+    const Result ok =
+        runMpm({"validate", "--print-scene", writeFile(dir + "/ok.json", waterScene(R"("frames": 1e2, "dx": 0.05)", box))}, dir);
     EXPECT_EQ(ok.code, 0) << ok.output;
     EXPECT_NE(ok.output.find("\"frames\": 100"), std::string::npos) << ok.output;
 }
@@ -485,7 +504,8 @@ TEST(Safety, TheDisplacementRuleIsInTheEstimateAndNamedWhenItExceedsTheLimit) {
     };
     const Result estimate = runMpm({"validate", scene("")}, dir);
     EXPECT_EQ(estimate.code, 0) << estimate.output;
-    EXPECT_NE(estimate.output.find("about 2084 at the start (dt = 2e-05 s, set by the displacement rule"), std::string::npos) << estimate.output;
+    EXPECT_NE(estimate.output.find("about 2084 at the start (dt = 2e-05 s, set by the displacement rule"), std::string::npos)
+        << estimate.output;
     ASSERT_EQ(runMpm({"run", scene(""), "-o", dir + "/out", "--quiet"}, dir).code, 0);
     const std::map<int, std::string> rows = statsRows(readFile(dir + "/out/stats.csv"));
     EXPECT_NE(rows.at(1).find(",2084,"), std::string::npos) << rows.at(1);  // substeps taken: the estimate's

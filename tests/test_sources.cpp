@@ -36,8 +36,8 @@ std::string write(const std::string& path, const std::string& text) {
 /// A VDB sphere level set of radius r about c, as Houdini would write one.
 void writeVdbSphere(const std::string& path, const Vec3d& c, double r, double voxel) {
     openvdb::initialize();
-    auto g = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(r), openvdb::Vec3f(float(c[0]), float(c[1]), float(c[2])),
-                                                                      float(voxel), 3.0f);
+    auto g = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        float(r), openvdb::Vec3f(float(c[0]), float(c[1]), float(c[2])), float(voxel), 3.0f);
     g->setName("surface");
     openvdb::io::File(path).write({g});
 }
@@ -100,10 +100,12 @@ TEST(MeshSource, ATranslatedAssetGivesTheSameParticlesDisplacedExactly) {
     for (const char* file : {"ball.obj", "ball.vdb"}) {
         const std::string type = std::string(file) == "ball.obj" ? "mesh" : "vdb";
         const Filled here = fill(dir, R"({"type": ")" + type + R"(", "file": ")" + file + "\"}");
-        const Filled there = fill(dir, R"({"type": ")" + type + R"(", "file": ")" + file + R"(", "transform": {"translate": [10, 0, 0]}})");
+        const Filled there =
+            fill(dir, R"({"type": ")" + type + R"(", "file": ")" + file + R"(", "transform": {"translate": [10, 0, 0]}})");
         ASSERT_EQ(here.x.size(), there.x.size()) << file;
         double worst = 0.0;
-        for (std::size_t i = 0; i < here.x.size(); ++i) worst = std::max(worst, (there.x[i] - here.x[i] - Vec3d(10, 0, 0)).norm());
+        for (std::size_t i = 0; i < here.x.size(); ++i)
+            worst = std::max(worst, (there.x[i] - here.x[i] - Vec3d(10, 0, 0)).norm());
         EXPECT_LT(worst, 1e-12) << file;
         EXPECT_DOUBLE_EQ(here.mass, there.mass) << file;
     }
@@ -152,7 +154,7 @@ TEST(MeshCollider, ATransformPlacesTheCollider) {
     auto sim = buildSimulation(parseScene(text, dir + "/scene.json"));
     const Collider& c = *sim->colliders()[0];
     EXPECT_NEAR(c.signedDistance(Vec3d(1.16, 0, 0), 0.0), -0.04, 0.005);  // 4 cm inside its surface (the band)
-    EXPECT_NEAR(c.signedDistance(Vec3d(1.25, 0, 0), 0.0), 0.05, 0.005);  // 5 cm outside its surface
+    EXPECT_NEAR(c.signedDistance(Vec3d(1.25, 0, 0), 0.0), 0.05, 0.005);   // 5 cm outside its surface
 }
 
 TEST(FileSource, BadFilesAreNamedErrors) {
@@ -226,11 +228,12 @@ TEST(PointsSource, APlyCloudGivesOneParticlePerPointWhereItIs) {
     // The same cloud in ASCII reads the same.
     std::ofstream ascii(dir + "/cloud.txt.ply");
     ascii.precision(17);
-    ascii << "ply\nformat ascii 1.0\nelement vertex " << x.size() << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+    ascii << "ply\nformat ascii 1.0\nelement vertex " << x.size()
+          << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
     for (const Vec3d& p : x) ascii << p.transpose() << "\n";
     ascii.close();
-    auto sim2 = buildSimulation(parseScene(sceneText(R"({"type": "points", "file": "cloud.txt.ply", "transform": {"translate": [1, 0, 0]}})"),
-                                           dir + "/scene.json"));
+    auto sim2 = buildSimulation(parseScene(
+        sceneText(R"({"type": "points", "file": "cloud.txt.ply", "transform": {"translate": [1, 0, 0]}})"), dir + "/scene.json"));
     sim2->emitDue();
     const ParticleArrays& Q = particlesOf(sim2->species()[0]);
     ASSERT_EQ(Q.size(), x.size());
@@ -243,14 +246,18 @@ TEST(PointsSource, EachPointKeepsItsOwnRadiusMassOrDensity) {
     // Three points of different pscale: each particle has its own cube's volume (scaled by the transform) and
     // the material's density; a file's mass or density replaces the material's, point by point.
     const std::string dir = tempDir("ply_attr");
-    write(dir + "/radii.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                              "property float pscale\nend_header\n0 0 0 0.005\n1 0 0 0.01\n2 0 0 0.02\n");
-    write(dir + "/mass.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
-                             "property float pscale\nproperty float mass\nend_header\n0 0 0 0.005 0.25\n1 0 0 0.01 0.5\n");
-    write(dir + "/density.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
-                                "property float pscale\nproperty float density\nend_header\n0 0 0 0.005 500\n1 0 0 0.01 2000\n");
-    write(dir + "/zero.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
-                             "property float pscale\nend_header\n0 0 0 0.005\n1 0 0 0\n");
+    write(dir + "/radii.ply",
+          "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+          "property float pscale\nend_header\n0 0 0 0.005\n1 0 0 0.01\n2 0 0 0.02\n");
+    write(dir + "/mass.ply",
+          "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+          "property float pscale\nproperty float mass\nend_header\n0 0 0 0.005 0.25\n1 0 0 0.01 0.5\n");
+    write(dir + "/density.ply",
+          "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+          "property float pscale\nproperty float density\nend_header\n0 0 0 0.005 500\n1 0 0 0.01 2000\n");
+    write(dir + "/zero.ply",
+          "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+          "property float pscale\nend_header\n0 0 0 0.005\n1 0 0 0\n");
     auto particles = [&](const std::string& shape) {
         auto sim = buildSimulation(parseScene(sceneText(shape), dir + "/scene.json"));
         sim->emitDue();
@@ -279,13 +286,17 @@ TEST(PointsSource, EachPointKeepsItsOwnRadiusMassOrDensity) {
 
 TEST(PointsSource, BadCloudsAreNamedErrors) {
     const std::string dir = tempDir("badply");
-    write(dir + "/empty.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n");
+    write(dir + "/empty.ply",
+          "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n");
     write(dir + "/noxyz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float u\nproperty float w\nend_header\n1 2\n");
-    write(dir + "/short.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n");
+    write(dir + "/short.ply",
+          "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n");
     write(dir + "/notply.ply", "solid stl\n");
-    const std::vector<std::pair<std::string, std::string>> cases = {
-        {"missing.ply", "no such point file"}, {"empty.ply", "no points"},     {"noxyz.ply", "no x, y, z properties (they have: u, w)"},
-        {"short.ply", "truncated"},            {"notply.ply", "not a PLY file"}};
+    const std::vector<std::pair<std::string, std::string>> cases = {{"missing.ply", "no such point file"},
+                                                                    {"empty.ply", "no points"},
+                                                                    {"noxyz.ply", "no x, y, z properties (they have: u, w)"},
+                                                                    {"short.ply", "truncated"},
+                                                                    {"notply.ply", "not a PLY file"}};
     for (const auto& [file, says] : cases) {
         try {
             buildSimulation(parseScene(sceneText(R"({"type": "points", "file": ")" + file + "\"}"), dir + "/scene.json"));
@@ -384,7 +395,9 @@ TEST(InitialVelocity, AVdbVelocityFieldIsSampledAtEachParticle) {
         EXPECT_EQ(P.v[i][1], 0.0f);
     }
     EXPECT_THROW(buildSimulation(parseScene(R"({"sets": [{"material": "water", "velocity_field": {"file": "none.vdb"},
-        "shape": {"type": "box", "min": [0, 0, 0], "max": [0.2, 0.2, 0.2]}}]})", dir + "/scene.json")), SceneError);
+        "shape": {"type": "box", "min": [0, 0, 0], "max": [0.2, 0.2, 0.2]}}]})",
+                                            dir + "/scene.json")),
+                 SceneError);
 }
 
 namespace {
@@ -525,13 +538,16 @@ TEST(SceneWarnings, TinySetsSetsInCollidersAndOverlapsAreNamed) {
         "colliders": [{"type": "plane"}]})";
     const std::vector<std::string> late = sceneWarnings(parseScene(later, dir + "/scene.json"));
     ASSERT_EQ(late.size(), 2u);
-    EXPECT_NE(late[0].find("/sets/0/start_frame: 11 is after the scene's last frame (simulation.frames 10"), std::string::npos) << late[0];
+    EXPECT_NE(late[0].find("/sets/0/start_frame: 11 is after the scene's last frame (simulation.frames 10"), std::string::npos)
+        << late[0];
     // A set too large to sample (a radius of 2 for 0.02), 84.4% below the floor (a sphere of radius 2 whose centre is 1 below
     // the plane: all but a cap of height 1, pi h^2 (3 r - h) / 3): a coarser sampling counts it, to the share of the volume
     // (measured: 0.1% off; the bound is ten times that).
     {
-        const std::vector<std::string> big = sceneWarnings(parseScene(R"({"sets": [{"material": "water", "shape": {"type": "sphere",
-            "center": [0, -1, 0], "radius": 2}}], "colliders": [{"type": "plane"}]})", dir + "/scene.json"));
+        const std::vector<std::string> big =
+            sceneWarnings(parseScene(R"({"sets": [{"material": "water", "shape": {"type": "sphere",
+            "center": [0, -1, 0], "radius": 2}}], "colliders": [{"type": "plane"}]})",
+                                     dir + "/scene.json"));
         ASSERT_EQ(big.size(), 1u);
         long long under = 0, all = 0;
         std::sscanf(big[0].c_str() + big[0].find("/sets/0/shape: "), "/sets/0/shape: about %lld of %lld", &under, &all);
@@ -540,9 +556,10 @@ TEST(SceneWarnings, TinySetsSetsInCollidersAndOverlapsAreNamed) {
     }
     // Starting at the last frame it is in the last file: no word, and there it is at the end of the run.
     {
-        const SceneDesc atEnd = parseScene(R"({"simulation": {"frames": 3, "dx": 0.05}, "sets": [{"material": "water", "start_frame": 3,
+        const SceneDesc atEnd =
+            parseScene(R"({"simulation": {"frames": 3, "dx": 0.05}, "sets": [{"material": "water", "start_frame": 3,
             "shape": {"type": "box", "min": [0, 0.1, 0], "max": [0.2, 0.3, 0.2]}}], "colliders": [{"type": "plane"}]})",
-                                           dir + "/scene.json");
+                       dir + "/scene.json");
         EXPECT_TRUE(sceneWarnings(atEnd).empty());
         auto sim = buildSimulation(atEnd);
         sim->emitDue();
@@ -552,23 +569,32 @@ TEST(SceneWarnings, TinySetsSetsInCollidersAndOverlapsAreNamed) {
     long long in = 0, of = -1;
     std::sscanf(late[1].c_str() + late[1].find("/sets/1/shape: "), "/sets/1/shape: %lld of %lld", &in, &of);
     EXPECT_EQ(in, of) << late[1];  // all of it
-    EXPECT_NE(late[1].find("particles start inside collider 0, a plane whose solid is on the side its normal (0, 1, 0) points away"),
-              std::string::npos) << late[1];
+    EXPECT_NE(
+        late[1].find("particles start inside collider 0, a plane whose solid is on the side its normal (0, 1, 0) points away"),
+        std::string::npos)
+        << late[1];
     EXPECT_NE(late[1].find("turn the plane's normal towards the set"), std::string::npos) << late[1];
     buildSimulation(parseScene(later, dir + "/scene.json"), Comm::single(), &derived);
     EXPECT_EQ(derived.warnings, late);
-    const std::string none = R"({"sets": [{"material": "water", "sampling": "lattice", "shape": {"type": "box", "min": [0.001, 0.001, 0.001],
+    const std::string none =
+        R"({"sets": [{"material": "water", "sampling": "lattice", "shape": {"type": "box", "min": [0.001, 0.001, 0.001],
         "max": [0.002, 0.002, 0.002]}}]})";
     for (bool run : {false, true}) {
         try {
-            if (run) buildSimulation(parseScene(none, dir + "/scene.json"));
-            else sceneWarnings(parseScene(none, dir + "/scene.json"));
+            if (run)
+                buildSimulation(parseScene(none, dir + "/scene.json"));
+            else
+                sceneWarnings(parseScene(none, dir + "/scene.json"));
             ADD_FAILURE() << "a set of no particle passed " << (run ? "the run" : "validate");
         } catch (const SceneError& e) {
-            EXPECT_NE(std::string(e.what()).find("/sets/0/shape: no particle fits in the shape at dx = 0.02 m"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("/sets/0/shape: no particle fits in the shape at dx = 0.02 m"),
+                      std::string::npos)
+                << e.what();
         }
     }
     // A scene that touches nothing has none.
     EXPECT_TRUE(sceneWarnings(parseScene(R"({"sets": [{"material": "water", "shape": {"type": "box", "min": [0, 0, 0],
-        "max": [0.2, 0.2, 0.2]}}], "colliders": [{"type": "plane"}]})", dir + "/scene.json")).empty());
+        "max": [0.2, 0.2, 0.2]}}], "colliders": [{"type": "plane"}]})",
+                                         dir + "/scene.json"))
+                    .empty());
 }

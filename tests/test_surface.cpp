@@ -2,8 +2,8 @@
 // closing and smoothing leaves no hole in the bulk of a body sampled at 8 per cell, keeps a resting pool's top
 // flat, and gives a ball of particles the area of the ball.
 #include <gtest/gtest.h>
-#include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetMeasure.h>
 
@@ -136,9 +136,10 @@ TEST(Surface, DefaultsCloseTheBulkKeepAPoolFlatAndABallItsArea) {
                         OutputDesc o;
                         o.surfaceRadius = radius, o.surfaceDilate = dilate, o.surfaceSmooth = smooth, o.surfaceErode = erode;
                         const PoolMeasures p = poolMeasures(o);
-                        std::printf("radius %.1f dilate %.1f smooth %d erode %.1f: pool rms %.3f dx, top at %+.3f dx, holes %ld; "
-                                    "ball area ratio %.4f\n",
-                                    radius, dilate, smooth, erode, p.rms / kDx, (p.meanHeight - 0.2) / kDx, p.holes, ballAreaRatio(o));
+                        std::printf(
+                            "radius %.1f dilate %.1f smooth %d erode %.1f: pool rms %.3f dx, top at %+.3f dx, holes %ld; "
+                            "ball area ratio %.4f\n",
+                            radius, dilate, smooth, erode, p.rms / kDx, (p.meanHeight - 0.2) / kDx, p.holes, ballAreaRatio(o));
                     }
     }
     const OutputDesc o;  // the defaults

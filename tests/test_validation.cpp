@@ -71,7 +71,8 @@ TEST(Validation, StaticFrictionHoldsABlockOnAnInclineAndOnATiltedFloor) {
     // Case 9 at the coarse level: mu above tan(theta) holds the block to under 0.1 cells in 0.4 s, on a tilted
     // plane (20 degrees, mu 0.5) and on a flat floor under tilted gravity (30 degrees, mu 0.7) in both modes, and
     // with wall_ghosts = "mirror" (which keeps a slip wall with friction held: mirrored, the block slid 2.8 cells).
-    for (const char* name : {"incline_separate_20deg_mu0.5", "floor_separate_30deg_mu0.7", "floor_slip_30deg_mu0.7", "floor_slip_30deg_mu0.7_mirror"}) {
+    for (const char* name : {"incline_separate_20deg_mu0.5", "floor_separate_30deg_mu0.7", "floor_slip_30deg_mu0.7",
+                             "floor_slip_30deg_mu0.7_mirror"}) {
         const CaseResult r = run(name);
         EXPECT_TRUE(r.pass) << name << ": slid " << r.error << " cells; " << r.detail;
     }
@@ -81,8 +82,8 @@ TEST(Validation, KineticFrictionGivesTheRigidBlockAcceleration) {
     // Case 9: mu below tan(theta) slides with g (sin - mu cos) within 3%, in `separate` and in `slip` (where
     // friction used to reach nodes moving away from the wall and braked the block to a near stop), and on a `slip`
     // floor in mirror mode (mirrored, it lost friction: 27% too fast).
-    for (const char* name : {"incline_separate_30deg_mu0.3", "incline_slip_30deg_mu0.3", "floor_separate_30deg_mu0.3", "floor_slip_30deg_mu0.3",
-                             "floor_slip_30deg_mu0.3_mirror"}) {
+    for (const char* name : {"incline_separate_30deg_mu0.3", "incline_slip_30deg_mu0.3", "floor_separate_30deg_mu0.3",
+                             "floor_slip_30deg_mu0.3", "floor_slip_30deg_mu0.3_mirror"}) {
         const CaseResult r = run(name);
         EXPECT_TRUE(r.pass) << name << ": acceleration error " << r.error << "; " << r.detail;
     }

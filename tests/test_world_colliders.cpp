@@ -61,7 +61,7 @@ Vec3d meanVelocity(const Simulation& sim, int species = 0) {
 
 TEST(MeshCollider, AnIcosphereDistanceFieldMatchesTheSphere) {
     const std::string dir = tempDir("ico");
-    const double r = 0.2, voxel = 0.02;  // 10 voxels per radius
+    const double r = 0.2, voxel = 0.02;                                                          // 10 voxels per radius
     const std::string obj = write(dir + "/ball.obj", icosphereObj(Vec3d(0.1, 0.2, 0.3), r, 4));  // 5120 triangles
     const TriangleMesh mesh = readMesh(obj);
     ASSERT_GE(mesh.triangles.size(), 2000u);
@@ -98,7 +98,8 @@ TEST(MeshCollider, AnOpenMeshNeedsAThicknessAndBadFilesAreNamed) {
     const std::map<std::string, std::string> cases = {
         {R"({"type": "mesh", "file": "sheet.obj"})", "sheet.obj: the mesh is open (4 edges belong to one triangle only)"},
         {R"({"type": "mesh", "file": "missing.obj"})", "missing.obj: no such mesh file"},
-        {R"({"type": "vdb", "file": "fog.vdb", "grid": "density"})", "fog.vdb: grid \"density\" is a fog volume, not a level set"},
+        {R"({"type": "vdb", "file": "fog.vdb", "grid": "density"})",
+         "fog.vdb: grid \"density\" is a fog volume, not a level set"},
         {R"({"type": "vdb", "file": "fog.vdb", "grid": "surface"})", "fog.vdb: no grid \"surface\" (the file holds \"density\")"},
         {R"({"type": "cylinder", "center": [0, 0, 0], "axis": [0, 0, 0], "radius": 1, "height": 1})",
          "/colliders/0/axis: must not be the zero vector"},
@@ -132,16 +133,19 @@ TEST(VdbCollider, AJellyOnAVdbSphereFollowsItsPathOnTheAnalyticSphere) {
     const std::string dir = tempDir("vdb");
     const double dx = 0.04, r = 0.3;
     {
-        auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(r), openvdb::Vec3f(0, 0, 0), float(dx / 2), 8.0f);
+        auto sphere =
+            openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(r), openvdb::Vec3f(0, 0, 0), float(dx / 2), 8.0f);
         sphere->setName("surface");
         openvdb::io::File(dir + "/ball.vdb").write({sphere});
     }
     auto scene = [&](const std::string& collider) {
         return R"({"simulation": {"dx": 0.04, "substeps": 5}, "sets": [{"material": "jelly", "sampling": "lattice",
             "shape": {"type": "box", "min": [-0.1, 0.35, -0.1], "max": [0.1, 0.55, 0.1]}, "velocity": [0.3, 0, 0]}],
-            "colliders": [)" + collider + "]}";
+            "colliders": [)" +
+               collider + "]}";
     };
-    auto analytic = build(scene(R"({"type": "sphere", "center": [0, 0, 0], "radius": 0.3, "boundary": "sticky"})"), dir + "/a.json");
+    auto analytic =
+        build(scene(R"({"type": "sphere", "center": [0, 0, 0], "radius": 0.3, "boundary": "sticky"})"), dir + "/a.json");
     auto vdb = build(scene(R"({"type": "vdb", "file": "ball.vdb", "boundary": "sticky"})"), dir + "/b.json");
     analytic->emitDue();
     vdb->emitDue();
@@ -181,9 +185,12 @@ TEST(MeshCollider, WaterAtRestInAThinWalledGlassStaysInsideAtTheDefaults) {
         for (const Vec3d& p : particlesOf(sim->species()[0]).x) {
             const Vec3d x = m.pointBack(p);
             const double r = std::max(std::fabs(x[0]), std::fabs(x[2]));
-            if (x[1] < 0.0) ++below;
-            else if (r > a) ++outside;
-            else if (r > a - w + tolerance || x[1] < w - tolerance) ++inWall;
+            if (x[1] < 0.0)
+                ++below;
+            else if (r > a)
+                ++outside;
+            else if (r > a - w + tolerance || x[1] < w - tolerance)
+                ++inWall;
             deepest = std::max({deepest, r - (a - w), w - x[1]});
         }
         std::printf("glass, %s: deepest %.3g of the wall's %.3g m\n", m.name.c_str(), deepest, w);
@@ -217,7 +224,8 @@ TEST(MeshCollider, WallThicknessIsMeasuredAndWallsTooThinForTheFieldAreNamed) {
     // dx/4 thick with a voxel_size of dx/2 given. validate names the file, the thickness and the voxel that would do.
     auto warnings = [&](const std::string& collider) {
         const std::string scene = write(dir + "/scene.json", R"({"simulation": {"dx": 0.02}, "sets": [{"material": "water",
-            "shape": {"type": "box", "min": [-0.05, 0.05, -0.05], "max": [0.05, 0.1, 0.05]}}], "colliders": [)" + collider + "]}");
+            "shape": {"type": "box", "min": [-0.05, 0.05, -0.05], "max": [0.05, 0.1, 0.05]}}], "colliders": [)" +
+                                                                 collider + "]}");
         std::string all;
         for (const std::string& w : sceneWarnings(loadScene(scene))) all += w + "\n";
         return all;
@@ -260,7 +268,8 @@ TEST(MovingCollider, AStickyPlatformCarriesTheBodyAtItsSpeedAndASlipOneSlidesUnd
     const std::string dir = tempDir("platform");
     for (const std::string& motion :
          {std::string(R"({"velocity": [1, 0, 0]})"),
-          std::string(R"({"keyframes": [{"frame": 0, "position": [-0.5, -0.1, 0]}, {"frame": 24, "position": [0.5, -0.1, 0]}]})")}) {
+          std::string(
+              R"({"keyframes": [{"frame": 0, "position": [-0.5, -0.1, 0]}, {"frame": 24, "position": [0.5, -0.1, 0]}]})")}) {
         auto sim = build(platformScene("sticky", motion), dir + "/sticky.json");
         sim->emitDue();
         for (int f = 0; f < 12; ++f) sim->advanceFrame();

@@ -4,7 +4,7 @@
 set -euo pipefail
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-PKGS=(cmake g++ make ccache pkg-config clang-14 libclang-rt-14-dev libassimp-dev
+PKGS=(cmake g++ make ccache pkg-config clang-14 clang-format-14 libclang-rt-14-dev libassimp-dev
       libopenvdb-dev libboost-iostreams-dev python3-imath
       libeigen3-dev libtbb-dev libblosc-dev
       libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev

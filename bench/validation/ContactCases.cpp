@@ -18,7 +18,7 @@ struct Slope {
     double thetaDegrees = 30.0;
     float mu = 0.3f;
     Boundary boundary = Boundary::Separate;
-    bool gridAligned = false;  ///< flat floor, gravity tilted; otherwise a tilted plane under vertical gravity
+    bool gridAligned = false;              ///< flat floor, gravity tilted; otherwise a tilted plane under vertical gravity
     WallGhosts ghosts = WallGhosts::Held;  ///< _mirror: simulation.wall_ghosts = "mirror"
 };
 
@@ -85,7 +85,8 @@ CaseResult slide(const CaseConfig& c, const Slope& k) {
         Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();
         sigma(1, 1) = -rho * g * std::cos(theta) * depth;
         sigma(0, 1) = sigma(1, 0) = rho * g * std::sin(theta) * depth;
-        const Eigen::Matrix3d strain = (sigma - lambda / (2 * mu + 3 * lambda) * sigma.trace() * Eigen::Matrix3d::Identity()) / (2 * mu);
+        const Eigen::Matrix3d strain =
+            (sigma - lambda / (2 * mu + 3 * lambda) * sigma.trace() * Eigen::Matrix3d::Identity()) / (2 * mu);
         sp.state.F[i] = (R * (Eigen::Matrix3d::Identity() + strain) * R.transpose()).cast<float>();
         sp.p.x[i] = R * sp.p.x[i];
     }
@@ -117,7 +118,8 @@ CaseResult slide(const CaseConfig& c, const Slope& k) {
     const double expected = g * (std::sin(theta) - k.mu * std::cos(theta));
     const double a = fitLine(t, v).first;
     const double err = std::abs(a - expected) / expected;
-    return finish(sim, wall, err, err < 0.03, kv({{"acceleration", a}, {"expected", expected}, {"slid_cells", slid}, {"mu", k.mu}}));
+    return finish(sim, wall, err, err < 0.03,
+                  kv({{"acceleration", a}, {"expected", expected}, {"slid_cells", slid}, {"mu", k.mu}}));
 }
 
 /// The two spheres' collision is over by then (approach 0.02 s, Hertz contact time about 0.07 s).
@@ -141,7 +143,8 @@ CaseResult twoSpheres(const CaseConfig& c, ContactModel model) {
         const ParticleArrays& P = particlesOf(sim.species()[b]);
         double m = 0;
         x[b] = v[b] = Vec3d::Zero();
-        for (std::size_t i = 0; i < P.size(); ++i) m += P.mass[i], x[b] += P.mass[i] * P.x[i], v[b] += P.mass[i] * P.v[i].cast<double>();
+        for (std::size_t i = 0; i < P.size(); ++i)
+            m += P.mass[i], x[b] += P.mass[i] * P.x[i], v[b] += P.mass[i] * P.v[i].cast<double>();
         x[b] /= m;
         v[b] /= m;
     }
@@ -197,8 +200,10 @@ CaseResult sphereDrop(const CaseConfig& c, WallContact contact) {
             sim.substep(sim.settings().targetDt());
             const double now = vy(), change = std::abs(now - before);
             before = now;
-            if (begin < 0.0 && change > tolerance) begin = t0;
-            else if (begin >= 0.0 && end < 0.0 && change <= tolerance) end = t0;
+            if (begin < 0.0 && change > tolerance)
+                begin = t0;
+            else if (begin >= 0.0 && end < 0.0 && change <= tolerance)
+                end = t0;
         }
         wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         const double t = (begin < 0.0 || end < 0.0) ? 0.0 : end - touch;
@@ -206,11 +211,13 @@ CaseResult sphereDrop(const CaseConfig& c, WallContact contact) {
         worst = std::max(worst, std::abs(t / hertz - 1.0));
         logV.push_back(std::log(speed));
         logT.push_back(std::log(std::max(t, 1e-12)));
-        ratios += (ratios.empty() ? "" : ";") + std::string("ratio_v") + std::to_string(speed).substr(0, 4) + "=" + std::to_string(t / hertz);
+        ratios += (ratios.empty() ? "" : ";") + std::string("ratio_v") + std::to_string(speed).substr(0, 4) + "=" +
+                  std::to_string(t / hertz);
         last = std::move(s.sim);
     }
     const double exponent = fitLine(logV, logT).first;
-    return finish(*last, wall, worst, worst < 0.1 && std::abs(exponent + 0.2) < 0.05, kv({{"exponent", exponent}, {"early_cells", early}}) + ";" + ratios);
+    return finish(*last, wall, worst, worst < 0.1 && std::abs(exponent + 0.2) < 0.05,
+                  kv({{"exponent", exponent}, {"early_cells", early}}) + ";" + ratios);
 }
 
 std::string slopeName(const Slope& k) {
@@ -224,28 +231,37 @@ std::string slopeName(const Slope& k) {
 
 void addContactCases(std::vector<ValidationCase>& v) {
     // On both sides of tan(theta) (0.364 at 20 degrees, 0.577 at 30), on the tilted plane and the flat floor.
-    const std::vector<Slope> slopes{
-        {20, 0.2f, Boundary::Separate, false}, {20, 0.5f, Boundary::Separate, false}, {30, 0.3f, Boundary::Separate, false},
-        {30, 0.7f, Boundary::Separate, false}, {30, 0.3f, Boundary::Slip, false},     {30, 0.7f, Boundary::Slip, false},
-        {30, 0.3f, Boundary::Separate, true},  {30, 0.3f, Boundary::Slip, true},      {30, 0.7f, Boundary::Separate, true},
-        {30, 0.7f, Boundary::Slip, true},
-        // Mirror mode keeps a slip floor with friction held: mirrored, it lost most of its friction.
-        {30, 0.3f, Boundary::Slip, true, WallGhosts::Mirror},  {30, 0.7f, Boundary::Slip, true, WallGhosts::Mirror}};
+    const std::vector<Slope> slopes{{20, 0.2f, Boundary::Separate, false},
+                                    {20, 0.5f, Boundary::Separate, false},
+                                    {30, 0.3f, Boundary::Separate, false},
+                                    {30, 0.7f, Boundary::Separate, false},
+                                    {30, 0.3f, Boundary::Slip, false},
+                                    {30, 0.7f, Boundary::Slip, false},
+                                    {30, 0.3f, Boundary::Separate, true},
+                                    {30, 0.3f, Boundary::Slip, true},
+                                    {30, 0.7f, Boundary::Separate, true},
+                                    {30, 0.7f, Boundary::Slip, true},
+                                    // Mirror mode keeps a slip floor with friction held: mirrored, it lost most of its friction.
+                                    {30, 0.3f, Boundary::Slip, true, WallGhosts::Mirror},
+                                    {30, 0.7f, Boundary::Slip, true, WallGhosts::Mirror}};
     for (const Slope& k : slopes) {
         const bool sticks = k.mu >= std::tan(k.thetaDegrees * M_PI / 180.0);
-        v.push_back({slopeName(k),
-                     sticks ? "|distance slid| from 0.1 to 0.5 s [cells]" : "|a - g (sin - mu cos)| / g (sin - mu cos), 0.1 to 0.5 s",
-                     sticks ? "< 0.1 cells (static friction holds)" : "< 3%", 0, 1, 0, [k](const CaseConfig& c) { return slide(c, k); }});
+        v.push_back(
+            {slopeName(k),
+             sticks ? "|distance slid| from 0.1 to 0.5 s [cells]" : "|a - g (sin - mu cos)| / g (sin - mu cos), 0.1 to 0.5 s",
+             sticks ? "< 0.1 cells (static friction holds)" : "< 3%", 0, 1, 0, [k](const CaseConfig& c) { return slide(c, k); }});
     }
     // The plane acting at the material's surface (the default), and wherever the stencil reaches it.
-    for (const auto& [name, wall] : {std::pair{"sphere_drop", WallContact::Surface}, std::pair{"sphere_drop_stencil", WallContact::Stencil}})
-        v.push_back({name, "max over impact speeds of |t_contact / t_Hertz - 1|", "< 10% at R/dx = 10, speed exponent -0.2 +- 0.05", 1, 1, 0,
+    for (const auto& [name, wall] :
+         {std::pair{"sphere_drop", WallContact::Surface}, std::pair{"sphere_drop_stencil", WallContact::Stencil}})
+        v.push_back({name, "max over impact speeds of |t_contact / t_Hertz - 1|",
+                     "< 10% at R/dx = 10, speed exponent -0.2 +- 0.05", 1, 1, 0,
                      [wall](const CaseConfig& c) { return sphereDrop(c, wall); }});
     // At R / dx = 4 and 8: one velocity field for both, and one each.
     for (const auto& [name, model] : {std::pair{"two_spheres_single_field", ContactModel::SingleField},
                                       std::pair{"two_spheres_multi_field", ContactModel::MultiField}})
-        v.push_back({name, "energy lost in a head-on elastic collision, (E0 - E) / E0, kinetic + stored", "< 5% at R/dx = 8, and parted", 1,
-                     1, 0, [model](const CaseConfig& c) { return twoSpheres(c, model); }});
+        v.push_back({name, "energy lost in a head-on elastic collision, (E0 - E) / E0, kinetic + stored",
+                     "< 5% at R/dx = 8, and parted", 1, 1, 0, [model](const CaseConfig& c) { return twoSpheres(c, model); }});
 }
 
 }  // namespace mpm::validation::support

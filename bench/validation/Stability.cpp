@@ -53,13 +53,15 @@ bool mirrored(const std::string& setup) {
     const std::string suffix = kMirrorSuffix;
     return setup.size() > suffix.size() && setup.compare(setup.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
-std::string baseSetup(const std::string& setup) { return mirrored(setup) ? setup.substr(0, setup.size() - std::string(kMirrorSuffix).size()) : setup; }
+std::string baseSetup(const std::string& setup) {
+    return mirrored(setup) ? setup.substr(0, setup.size() - std::string(kMirrorSuffix).size()) : setup;
+}
 
 std::string scene(const StabilityRun& r, const std::string& sets, const std::string& colliders, bool gravity) {
     std::ostringstream s;
     s << R"({ "simulation": { "frames": 1, "fps": 1, "substeps": 1, "dx": )" << kDx << R"(, "cfl": )" << r.cfl
-      << (mirrored(r.setup) ? R"(, "wall_ghosts": "mirror")" : "")
-      << R"(, "interpolation": ")" << (r.interpolation == Interpolation::Cubic ? "cubic" : "quadratic") << R"(", "gravity": )"
+      << (mirrored(r.setup) ? R"(, "wall_ghosts": "mirror")" : "") << R"(, "interpolation": ")"
+      << (r.interpolation == Interpolation::Cubic ? "cubic" : "quadratic") << R"(", "gravity": )"
       << (gravity ? vec(0, -9.81, 0) : vec(0, 0, 0)) << R"(, "energy_growth_limit": 0.5 },)"
       << R"( "output": { "surface": false }, "sets": [ )" << sets << R"( ], "colliders": [ )" << colliders << " ] }";
     return s.str();
@@ -131,10 +133,20 @@ void spin(Simulation& sim, double omega) {
 
 const std::vector<std::string>& stabilitySetups() {
     // The setups with sticky walls once more with mirrored ghost nodes (simulation.wall_ghosts = "mirror").
-    static const std::vector<std::string> s = {"resting_block",        "sliver",         "collision",          "spinning_sphere",
-                                               "dropped_column",       "steel_block",    "soft_block",         "wall_impact",
-                                               "resting_block_mirror", "sliver_mirror",  "dropped_column_mirror",
-                                               "steel_block_mirror",   "soft_block_mirror", "wall_impact_mirror"};
+    static const std::vector<std::string> s = {"resting_block",
+                                               "sliver",
+                                               "collision",
+                                               "spinning_sphere",
+                                               "dropped_column",
+                                               "steel_block",
+                                               "soft_block",
+                                               "wall_impact",
+                                               "resting_block_mirror",
+                                               "sliver_mirror",
+                                               "dropped_column_mirror",
+                                               "steel_block_mirror",
+                                               "soft_block_mirror",
+                                               "wall_impact_mirror"};
     return s;
 }
 

@@ -23,11 +23,25 @@ struct Box {
         Vec3d centre = 0.5 * (s.min + s.max), size = s.max - s.min;
         Rotation rotation;
         // The resolved scene states the form given: the other one's keys are derived from it.
-        v.vec3(Key{.name = "min", .help = "lowest corner (or give center and size)", .unit = "m", .required = corners, .derived = !corners}, s.min);
+        v.vec3(Key{.name = "min",
+                   .help = "lowest corner (or give center and size)",
+                   .unit = "m",
+                   .required = corners,
+                   .derived = !corners},
+               s.min);
         v.vec3(Key{.name = "max", .help = "highest corner", .unit = "m", .required = corners, .derived = !corners}, s.max);
-        v.vec3(Key{.name = "center", .help = "centre, instead of min and max", .unit = "m", .byDefault = "from min and max", .derived = corners},
+        v.vec3(Key{.name = "center",
+                   .help = "centre, instead of min and max",
+                   .unit = "m",
+                   .byDefault = "from min and max",
+                   .derived = corners},
                centre);
-        v.vec3(Key{.name = "size", .help = "edge lengths, with center", .unit = "m", .byDefault = "from min and max", .derived = corners}, size);
+        v.vec3(Key{.name = "size",
+                   .help = "edge lengths, with center",
+                   .unit = "m",
+                   .byDefault = "from min and max",
+                   .derived = corners},
+               size);
         v.object(Key{.name = "rotation", .help = "turn about the centre, with center and size", .derived = corners},
                  [&](auto& r) { Rotation::keys(r, rotation); });
         v.check(!(v.given("center") != v.given("size")), v.given("center") ? "size" : "center", "give center and size together");
@@ -38,7 +52,8 @@ struct Box {
             s.R = rotation.matrix();
             s.rotated = rotation.degrees != 0.0;
         }
-        v.check((s.max - s.min).minCoeff() > 0, corners ? "max" : "size", corners ? "must exceed min in every axis" : "must be positive in every axis");
+        v.check((s.max - s.min).minCoeff() > 0, corners ? "max" : "size",
+                corners ? "must exceed min in every axis" : "must be positive in every axis");
     }
 
     Vec3d middle() const { return 0.5 * (min + max); }

@@ -21,7 +21,8 @@ struct Cylinder {
         v.vec3(Key{.name = "center", .help = "centre", .unit = "m", .required = true}, s.centre);
         v.vec3(Key{.name = "axis", .help = "axis direction (any length but zero)"}, s.axis);
         v.number(Key{.name = "radius", .help = "radius", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true}, s.radius);
-        v.number(Key{.name = "height", .help = "length along the axis", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true}, s.height);
+        v.number(Key{.name = "height", .help = "length along the axis", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true},
+                 s.height);
         v.check(s.axis.norm() >= kTiny, "axis", "must not be the zero vector");
         if (s.axis.norm() >= kTiny) s.axis.normalize();
     }
@@ -59,7 +60,8 @@ struct Cylinder {
     double volume() const { return M_PI * radius * radius * height; }
     void bounds(Vec3d& lo, Vec3d& hi) const {
         Vec3d e;
-        for (int i = 0; i < 3; ++i) e[i] = 0.5 * height * std::fabs(axis[i]) + radius * std::sqrt(std::max(0.0, 1.0 - axis[i] * axis[i]));
+        for (int i = 0; i < 3; ++i)
+            e[i] = 0.5 * height * std::fabs(axis[i]) + radius * std::sqrt(std::max(0.0, 1.0 - axis[i] * axis[i]));
         lo = centre - e;
         hi = centre + e;
     }

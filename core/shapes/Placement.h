@@ -14,7 +14,8 @@ struct Placement {
     template <class V>
     static void keys(V& v, Placement& p) {
         v.vec3(Key{.name = "translate", .help = "offset added last", .unit = "m"}, p.translate);
-        v.object(Key{.name = "rotate", .help = "turn about the file's origin, after scaling"}, [&](auto& r) { Rotation::keys(r, p.rotate); });
+        v.object(Key{.name = "rotate", .help = "turn about the file's origin, after scaling"},
+                 [&](auto& r) { Rotation::keys(r, p.rotate); });
         v.number(Key{.name = "scale", .help = "uniform scale about the file's origin, first", .lo = 1e-6, .hi = 1e6}, p.scale);
     }
     bool identity() const { return translate.isZero() && rotate.degrees == 0.0 && scale == 1.0; }

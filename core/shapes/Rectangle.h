@@ -24,12 +24,16 @@ struct Rectangle {
         v.check(s.normal.norm() >= kTiny, "normal", "must not be the zero vector");
         // Decided before the axis is read, so that the resolved scene states the axis taken.
         if (!v.given("axis") && s.normal.norm() >= kTiny && std::abs(s.normal.normalized().x()) > 0.9) s.axis = Vec3d::UnitZ();
-        v.vec3(Key{.name = "axis", .help = "the direction of the width side", .byDefault = "X, or Z for a normal along X"}, s.axis);
-        v.number(Key{.name = "width", .help = "side along axis", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true}, s.width);
-        v.number(Key{.name = "height", .help = "side along normal x axis", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true},
-                 s.height);
-        v.check((s.axis - s.axis.dot(s.normal.normalized()) * s.normal.normalized()).norm() >= kTiny * std::max(1.0, s.axis.norm()),
-                "axis", "must not be parallel to the normal");
+        v.vec3(Key{.name = "axis", .help = "the direction of the width side", .byDefault = "X, or Z for a normal along X"},
+               s.axis);
+        v.number(Key{.name = "width", .help = "side along axis", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true},
+                 s.width);
+        v.number(
+            Key{.name = "height", .help = "side along normal x axis", .lo = kTiny, .hi = kHuge, .unit = "m", .required = true},
+            s.height);
+        v.check(
+            (s.axis - s.axis.dot(s.normal.normalized()) * s.normal.normalized()).norm() >= kTiny * std::max(1.0, s.axis.norm()),
+            "axis", "must not be parallel to the normal");
     }
 
     double area() const { return width * height; }

@@ -13,12 +13,17 @@ struct Rotation {
     template <class V>
     static void keys(V& v, Rotation& r) {
         v.vec3(Key{.name = "axis", .help = "rotation axis (any length but zero)"}, r.axis);
-        v.number(Key{.name = "degrees", .help = "rotation angle, right-handed about the axis", .lo = -1e6, .hi = 1e6, .unit = "degrees"},
+        v.number(Key{.name = "degrees",
+                     .help = "rotation angle, right-handed about the axis",
+                     .lo = -1e6,
+                     .hi = 1e6,
+                     .unit = "degrees"},
                  r.degrees);
         v.check(r.axis.norm() >= kTiny, "axis", "must not be the zero vector");
     }
     Mat3d matrix() const {
-        return degrees == 0.0 ? Mat3d::Identity() : Mat3d(Eigen::AngleAxisd(degrees * M_PI / 180.0, axis.normalized()).toRotationMatrix());
+        return degrees == 0.0 ? Mat3d::Identity()
+                              : Mat3d(Eigen::AngleAxisd(degrees * M_PI / 180.0, axis.normalized()).toRotationMatrix());
     }
 };
 

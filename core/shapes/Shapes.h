@@ -1,8 +1,8 @@
 #pragma once
 // The closed lists of shapes: those that fill particle sets (a finite volume with `contains`, `volume` and
 // `bounds`, or a file whose level set's inside is filled) and those that collide (a signed distance, positive
-// outside, and its normal; or a file that becomes a level set when the scene is built). Each shape is one file with its formula and scene keys; a
-// new one is that file and one entry in a list here.
+// outside, and its normal; or a file that becomes a level set when the scene is built). Each shape is one file with its formula
+// and scene keys; a new one is that file and one entry in a list here.
 #include <string>
 #include <variant>
 #include <vector>

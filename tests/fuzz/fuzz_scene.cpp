@@ -13,7 +13,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     try {
         const mpm::SceneDesc scene = mpm::parseScene(text, "fuzz.json");
         (void)mpm::estimateBudget(scene, false);
-    } catch (const mpm::SceneError&) {
-    }
+    } catch (const mpm::SceneError&) {}
     return 0;
 }
