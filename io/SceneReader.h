@@ -3,6 +3,7 @@
 // JSON path and what is allowed, and unknown keys are errors. The keys themselves are declared once, where
 // they belong (io/SceneKeys.h, materials/, core/shapes/), and docs/scene-format.md is generated from them.
 #include <string>
+#include <string_view>
 
 #include "io/SceneDesc.h"
 
@@ -15,5 +16,8 @@ SceneDesc parseScene(const std::string& text, const std::string& path);
 
 /// Every field with its default and allowed values, as Markdown (`mpm validate --explain`).
 std::string explainSceneFormat();
+/// The complete scene docs/scene-format.md shows first (a test runs it): a dam of water behind a gate lifted by
+/// keyframes, in a tank, and a jelly ball thrown in later.
+std::string_view exampleScene();
 
 }  // namespace mpm

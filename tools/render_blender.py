@@ -70,7 +70,8 @@ def parse_args():
                    help="exit 1 if the material or the colliders are missing from the image")
     p.add_argument("--min-coverage", type=float, default=0.01, help="least image fraction each must cover")
     p.add_argument("--check-colours", action="store_true",
-                   help="exit 1 unless every set with a `color` shows in the image in its hue (with --check-not-empty)")
+                   help="exit 1 unless every set with a colour shows in the image in its hue (over --min-coverage / 2 "
+                        "shared among the sets)")
     return p.parse_args(argv)
 
 
@@ -685,9 +686,9 @@ def render_one(vdb, frame, out, args, scene, bounds):
     stage(*bounds, args.floor and (args.no_colliders or not has_floor(scene)), view)
     render(out, args, args.samples)
     print("render_blender: wrote " + out)
+    if args.check_colours:
+        check_colours(out, args, scene)
     if args.check_not_empty:
-        if args.check_colours:
-            check_colours(out, args, scene)
         check_coverage(out, args, surfaces, colliders)
 
 
