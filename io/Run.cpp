@@ -172,8 +172,10 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     layout_ = speciesLayout(scene_);
     identity_ = sceneIdentity(scene_.resolvedJson);
     hash_ = sceneHash(identity_);
-    const std::string starting = options_.resume || options_.framesGiven
-                                     ? "reading a checkpoint or emitting the sets due at the start"
+    const std::string starting = options_.resume ? "reading the newest usable checkpoint of " + dir_
+                                 : options_.framesGiven
+                                     ? "reading the newest checkpoint before frame " + std::to_string(options_.firstFrame) +
+                                           " of " + dir_ + ", or else emitting the sets due at the start"
                                      : "emitting the sets due at the start";
     events_.note(starting + " (" + std::to_string(heldSamples_) + " particles sampled)");
     guarded(starting, [&] { chooseStart(); });
