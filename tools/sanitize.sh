@@ -23,6 +23,8 @@ slow='^(SceneChecks|Validation|MovingCollider)\.|^Safety\.(Killed|FramesAToB)|'
 slow+='^Ranks\.|^MultiField\.(TwoElastic|ABlock)|^MeshCollider\.WaterAtRest|^VdbCollider\.ARising|^Cli\.ValidateShipped|^RigidRotation\.Apic|^ContinuousSource\.Resuming'
 # A timing bound of OpenVDB's band growth (6 s in Release), which the sanitizers' -O1 build of our code cannot speak to.
 slow+='|^Cli\.AVdbColliderInASceneOfHugeCells'
+# Long physics runs whose code paths the suite's shorter contact tests already take (206 s here under ASan, 13 s in Release).
+slow+='|^FrictionWall\.'
 ctest --test-dir "$build" -L unit -E "$slow" --output-on-failure -j2
 # The rank layer under the sanitizers: a scene with water, jelly, emitters and friction colliders on 1 and 3
 # ranks (mpirun on loopback), and one of bodies with fields of their own on mirrored walls on 1 and 2, must run
