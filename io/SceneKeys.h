@@ -32,6 +32,7 @@ inline Vec3f defaultColour(const std::string& material) {
     if (material == "snow") return {0.92f, 0.94f, 0.97f};
     if (material == "sand") return {0.76f, 0.6f, 0.38f};
     if (material == "metal") return {0.72f, 0.74f, 0.78f};
+    if (material == "viscous") return {0.8f, 0.45f, 0.05f};
     return {0.6f, 0.6f, 0.6f};
 }
 
@@ -183,12 +184,14 @@ void outputKeys(V& v, OutputDesc& o) {
               o.checkpointEvery);
     v.integer(Key{.name = "checkpoints_kept", .help = "the newest checkpoints kept; older ones are removed", .lo = 1, .hi = 1000},
               o.checkpointsKept);
-    v.choices(Key{.name = "attributes",
-                  .help = "point attributes written beside P, v, id, material, set, pscale and Cd: J (volume ratio), Jp "
-                          "(plastic volume ratio), stress_norm (Cauchy stress, Frobenius norm, Pa), F (elastic deformation "
-                          "gradient, 3x3), plastic_strain (equivalent plastic strain of metal)",
-                  .noun = "point attribute"},
-              o.attributes, PointAttributes::names());
+    v.choices(
+        Key{.name = "attributes",
+            .help =
+                "point attributes written beside P, v, id, material, set, pscale and Cd: J (volume ratio), Jp "
+                "(plastic volume ratio), stress_norm (Cauchy stress, Frobenius norm, Pa), F (elastic deformation "
+                "gradient, 3x3), plastic_strain (equivalent plastic strain of metal, the accumulated flow of a viscous liquid)",
+            .noun = "point attribute"},
+        o.attributes, PointAttributes::names());
     v.choice(Key{.name = "rank_files",
                  .help = "on several ranks (mpirun): `gathered` has rank 0 write every frame as one process does (the same "
                          "files and bits; up to what rank 0's memory holds, about 1.5e8 particles on 24 GiB); `per_rank` has "

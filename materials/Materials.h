@@ -34,6 +34,7 @@
 #include <type_traits>
 
 #include "materials/FixedCorotated.h"
+#include "materials/HerschelBulkley.h"
 #include "materials/NeoHookean.h"
 #include "materials/Sand.h"
 #include "materials/Snow.h"
@@ -118,7 +119,7 @@ constexpr bool paramsUnique(MaterialList<Ms...>) {
 }
 
 // Checkpoints name a material by its place here: a new one goes last.
-using AllMaterials = MaterialList<Water, FixedCorotated, NeoHookean, Snow, Sand, VonMises MPM_EXTRA_MATERIALS>;
+using AllMaterials = MaterialList<Water, FixedCorotated, NeoHookean, Snow, Sand, VonMises, HerschelBulkley MPM_EXTRA_MATERIALS>;
 static_assert(checkMaterials(AllMaterials{}));
 static_assert(sceneNamesUnique(AllMaterials{}), "two materials share a kSceneName");
 static_assert(paramsUnique(AllMaterials{}), "two materials share a Params type (derive one of its own)");

@@ -62,6 +62,7 @@ py::dict pointDict(const Points& p) {
     if (!p.J.empty()) d["J"] = scalars(p.J);
     if (!p.Jp.empty()) d["Jp"] = scalars(p.Jp);
     if (!p.stressNorm.empty()) d["stress_norm"] = scalars(p.stressNorm);
+    if (!p.plasticStrain.empty()) d["plastic_strain"] = scalars(p.plasticStrain);
     if (!p.F.empty()) d["F"] = matrices(p.F);
     return d;
 }
@@ -149,8 +150,9 @@ PYBIND11_MODULE(sparse_mpm, m) {
         },
         py::arg("path"),
         "The points of a frame file (<scene>_NNNN.vdb or <scene>_points_NNNN.vdb): a dict of numpy arrays keyed by attribute "
-        "name: P (n, 3) float64, v (n, 3) float32, id, material, set (int32), and pscale, Cd, J, Jp, stress_norm, F (n, 3, 3) "
-        "where the file has them.");
+        "name: P (n, 3) float64, v (n, 3) float32, id, material, set (int32), and pscale, Cd, J, Jp, stress_norm, "
+        "plastic_strain, F "
+        "(n, 3, 3) where the file has them.");
     m.def(
         "read_frame_names",
         [](const std::string& path) {

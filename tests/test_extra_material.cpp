@@ -25,7 +25,7 @@ TEST(ExtraMaterial, JoinsScenesAndTheFormatByItsHeaderAndOneListEntry) {
     EXPECT_EQ(sp.params.lambda, l.lambda);
     const std::string format = explainSceneFormat();
     EXPECT_NE(format.find("**linear** (`linear_elastic`)"), std::string::npos);
-    EXPECT_NE(format.find("jelly, rubber, snow, sand, metal, linear"), std::string::npos);
+    EXPECT_NE(format.find("jelly, rubber, snow, sand, metal, viscous, linear"), std::string::npos);
     try {
         parseScene(
             R"({"sets":[{"material":"linear","material_params":{"bulk_modulus":1},"shape":{"type":"box","min":[0,0,0],"max":[1,1,1]}}]})",

@@ -253,6 +253,7 @@ TEST(MaterialBatch, StressAndReturnMapMatchOneParticleAtATime) {
     expectBatchMatchesScalar<Sand>();
     expectBatchMatchesScalar<NeoHookean>();  // no batch of its own: the fallback loop
     expectBatchMatchesScalar<VonMises>();
+    expectBatchMatchesScalar<HerschelBulkley>();
 }
 
 TEST(NeoHookeanModel, InvertedElementIsReportedNotClamped) {

@@ -16,7 +16,7 @@ import sparse_mpm
 
 FREE_BALL = {
     "simulation": {"frames": 4, "dx": 0.05, "substeps": 2, "gravity": [0, 0, 0]},
-    "output": {"surface": False, "attributes": ["J", "Jp", "stress_norm", "F"]},
+    "output": {"surface": False, "attributes": ["J", "Jp", "stress_norm", "F", "plastic_strain"]},
     "sets": [{"name": "ball", "material": "jelly", "shape": {"type": "sphere", "center": [0, 0, 0], "radius": 0.2}},
              {"name": "drop", "material": "water", "shape": {"type": "box", "min": [1, 0, 0], "max": [1.2, 0.2, 0.2]}}],
 }
@@ -43,13 +43,14 @@ class SimulationTest(unittest.TestCase):
         self.assertEqual(p["P"].shape, (n, 3))
         self.assertEqual(p["v"].dtype, np.float32)
         self.assertEqual(p["F"].shape, (n, 3, 3))
-        for key in ("id", "material", "set", "pscale", "Cd", "J", "Jp", "stress_norm"):
+        for key in ("id", "material", "set", "pscale", "Cd", "J", "Jp", "stress_norm", "plastic_strain"):
             self.assertEqual(len(p[key]), n, key)
         # At rest: F = I, J = 1, no stress; ids 0..n-1; the sets' names.
         np.testing.assert_allclose(p["F"], np.broadcast_to(np.eye(3, dtype=np.float32), (n, 3, 3)))
         np.testing.assert_array_equal(np.sort(p["id"]), np.arange(n))
         self.assertEqual(sim.set_names, ["ball", "drop"])
         self.assertEqual(float(np.abs(p["stress_norm"]).max()), 0.0)
+        self.assertEqual(float(np.abs(p["plastic_strain"]).max()), 0.0)
 
     def test_a_velocity_set_from_python_carries_the_bodies_as_momentum_says(self):
         # No gravity, no collider: bodies given one velocity move rigidly by v t, and momentum is M v throughout.

@@ -34,7 +34,7 @@ from mathutils import Matrix, Quaternion, Vector
 # Base colours per material (linear RGB); sets of other materials take the palette in order.
 MATERIAL_COLOURS = {"water": (0.15, 0.4, 0.9), "jelly": (0.85, 0.2, 0.25), "rubber": (0.55, 0.25, 0.7),
                     "snow": (0.92, 0.94, 0.97), "sand": (0.76, 0.6, 0.38),
-                    "metal": (0.72, 0.74, 0.78)}
+                    "metal": (0.72, 0.74, 0.78), "viscous": (0.8, 0.45, 0.05)}
 PALETTE = [(0.2, 0.65, 0.35), (0.9, 0.6, 0.1), (0.3, 0.7, 0.8), (0.6, 0.6, 0.2)]
 COLLIDER_COLOUR = (0.42, 0.4, 0.38)
 # A collider's drawn extent is clipped to the material's bounds grown by this many times their size, so a

@@ -37,7 +37,9 @@ std::string materialParams(const std::string& material, const std::string& stiff
     if (stiffness.empty()) return "{}";
     const char* rho = stiffness == "steel" ? "7850" : "1000";
     const char* modulus = stiffness == "steel" ? "2e11" : "1e2";
-    if (material == "water") return std::string(R"({ "density": )") + rho + R"(, "bulk_modulus": )" + modulus + " }";
+    // The liquids' stiffness is their equation of state's bulk modulus (the viscous liquid's shear modulus follows it).
+    if (material == "water" || material == "viscous")
+        return std::string(R"({ "density": )") + rho + R"(, "bulk_modulus": )" + modulus + " }";
     return std::string(R"({ "density": )") + rho + R"(, "youngs_modulus": )" + modulus + " }";
 }
 
@@ -151,7 +153,7 @@ const std::vector<std::string>& stabilitySetups() {
 }
 
 const std::vector<std::string>& stabilityMaterials() {
-    static const std::vector<std::string> m = {"water", "jelly", "rubber", "snow", "sand"};
+    static const std::vector<std::string> m = {"water", "jelly", "rubber", "snow", "sand", "metal", "viscous"};
     return m;
 }
 

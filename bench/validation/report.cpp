@@ -1,7 +1,7 @@
 // mpm_report: error against run time over resolutions and accuracy/speed choices, and the stability
 // sweep. Writes CSVs and machine.txt; tools/validation_report.py turns them into PNG plots and report.md.
 //   mpm_report accuracy  [--out DIR] [--cases a,b] [--quick]
-//   mpm_report stability [--out DIR] [--quick]
+//   mpm_report stability [--out DIR] [--quick] [--setups a,b] [--materials a,b]
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <CLI/CLI.hpp>
@@ -89,7 +89,7 @@ int accuracy(const std::string& dir, const std::string& only, bool quick, int th
     return 0;
 }
 
-int stability(const std::string& dir, const std::string& only, bool quick, int threads) {
+int stability(const std::string& dir, const std::string& only, const std::string& materials, bool quick, int threads) {
     const std::vector<double> cfls = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.2};
     std::ostringstream csv;
     csv << "setup,material,kernel,cfl,stable,substeps,particles,min_J,max_speed,energy_growth,wall_seconds,threads,reason\n";
@@ -98,6 +98,7 @@ int stability(const std::string& dir, const std::string& only, bool quick, int t
         for (const std::string& material : stabilityMaterials())
             for (Interpolation k : {Interpolation::Quadratic, Interpolation::Cubic}) {
                 if (quick && k == Interpolation::Cubic) continue;
+                if (!materials.empty() && ("," + materials + ",").find("," + material + ",") == std::string::npos) continue;
                 // Descending from the largest C: the first stable value is the largest stable one (stability
                 // is taken as monotone in C; cheap where everything is stable, the common case). The default C
                 // is run too, so that its verdict is measured rather than inferred.
@@ -146,8 +147,9 @@ int main(int argc, char** argv) {
         sub->add_option("--scenes", scenes, "the scenes/validation directory (default: the source tree's)");
     }
     app.get_subcommand("accuracy")->add_option("--cases", only, "comma-separated case names (default all)");
-    std::string setups;
+    std::string setups, materials;
     app.get_subcommand("stability")->add_option("--setups", setups, "comma-separated setup names (default all)");
+    app.get_subcommand("stability")->add_option("--materials", materials, "comma-separated materials (default all)");
     CLI11_PARSE(app, argc, argv);
     const int n = threads > 0 ? threads : int(std::thread::hardware_concurrency());
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(n));
@@ -156,7 +158,7 @@ int main(int argc, char** argv) {
         std::filesystem::create_directories(out);
         writeMachine(out, n);
         if (app.got_subcommand("accuracy")) return accuracy(out, only, quick, n);
-        return stability(out, setups, quick, n);
+        return stability(out, setups, materials, quick, n);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "mpm_report: error: %s\n", e.what());
         return 1;
