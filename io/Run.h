@@ -80,6 +80,10 @@ private:
     /// Reads frame `files.frame`'s checkpoint (whole, or this rank's parts of a set: then `share`), or warns
     /// why it cannot be used and returns false (every rank alike). `path` names it in notes.
     bool readCheckpointOf(const CheckpointFiles& files, Checkpoint& c, bool& share, std::string& path);
+    /// Whether the directory holds any checkpoint file of this scene that --resume (or --frames A:B) could start
+    /// from, usable or not; and the message when none is usable.
+    bool anyCheckpointToResume() const;
+    std::string nothingToResume() const;
     void saveCheckpoint();
     /// Refuses a scene whose name makes file names longer than the output directory's file system takes (exit 2).
     void refuseNamesTooLong() const;
