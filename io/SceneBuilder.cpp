@@ -507,6 +507,24 @@ void entryWarnings(const SceneDesc& scene, std::size_t i, std::vector<std::strin
                   std::to_string(frames) + " or more frames");
 }
 
+/// Set i's word on a viscous liquid that would act as a solid: its relaxation time K / G (at a shear rate of 1/s
+/// when flow_index is not 1) longer than a frame, so that the elasticity that keeps its step free of the viscosity
+/// shows in the animation (materials/HerschelBulkley.h; docs/method.md, section 5).
+void liquidWarnings(const SceneDesc& scene, std::size_t i, std::vector<std::string>& out) {
+    const ParticleSetDesc& d = scene.sets[i];
+    const auto* p = std::get_if<HerschelBulkley::Params>(&d.params);
+    if (!p) return;
+    const double shearModulus = double(p->shearModulus) * d.muScale, frame = 1.0 / scene.settings.fps;
+    const double relaxation = double(p->viscosity) / shearModulus;
+    if (!(relaxation > frame)) return;
+    std::ostringstream s;
+    s << scene.file << ": /sets/" << i << "/material_params/viscosity: " << p->viscosity << " over the shear modulus "
+      << shearModulus << " Pa relaxes in " << relaxation << " s, longer than a frame (" << frame
+      << " s): the liquid will flow as an elastic solid that creeps, not as a liquid; raise shear_modulus (the time step "
+         "shrinks with its square root) or lower the viscosity";
+    out.push_back(s.str());
+}
+
 /// Set i's word on its own sampling (n particles in all) and on each collider it starts inside of: `inside[c]` of
 /// its particles lie inside collider c at its start.
 /// `estimated`: the counts come from a coarser sampling of the set (it is too large to sample whole).
@@ -610,6 +628,7 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
                           "\" names a body, but simulation.contact is single_field, where all bodies share one velocity field "
                           "(set it to multi_field)");
         entryWarnings(scene, i, out);
+        liquidWarnings(scene, i, out);
         if (d.continuous || isOutlet(d.shape)) continue;  // a stream enters over time
         double volume = 0.0;
         Vec3d lo, hi;
@@ -684,6 +703,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const ParticleSetDesc& d = scene.sets[i];
         entryWarnings(scene, i, found.warnings);
+        liquidWarnings(scene, i, found.warnings);
         AnyMaterialParams params = d.params;
         visitMaterialParams(params, [&]<class M>(typename M::Params& p) { M::scaleStiffness(p, d.lambdaScale, d.muScale); });
         const int species = sim->addSpecies(makeSpecies(d.name, params), bodyOf[i]);

@@ -261,9 +261,13 @@ void setKeys(V& v, ParticleSetDesc& d) {
                   .lo = 0,
                   .hi = 1e8},
               d.pauseFrames);
-    v.number(Key{.name = "lambda_scale", .help = "scales the preset's lambda (water: its bulk modulus k)", .lo = 0.0, .hi = 1e6},
+    v.number(Key{.name = "lambda_scale",
+                 .help = "scales the preset's lambda (water and viscous: the bulk modulus k)",
+                 .lo = 0.0,
+                 .hi = 1e6},
              d.lambdaScale);
-    v.number(Key{.name = "mu_scale", .help = "scales the preset's mu", .lo = 0.0, .hi = 1e6}, d.muScale);
+    v.number(Key{.name = "mu_scale", .help = "scales the preset's mu (viscous: the shear modulus G)", .lo = 0.0, .hi = 1e6},
+             d.muScale);
     v.number(Key{.name = "mass_scale", .help = "scales particle mass", .lo = 1e-6, .hi = 1e6}, d.massScale);
     v.integer(Key{.name = "seed", .help = "sampling seed", .lo = 0, .hi = 4294967295.0, .byDefault = "set index + 1"}, d.seed);
 }

@@ -147,3 +147,23 @@ TEST(ViscousFlow, ABinghamColumnBetweenStickyWallsHangsAboveItsYieldStressAndFlo
     EXPECT_NEAR(plug, up, 0.05 * up);
     EXPECT_NEAR(flows.flowV, flows.flowX, 0.01 * std::abs(flows.flowX));
 }
+
+TEST(ViscousFlow, ALiquidThatWouldActAsASolidIsWarnedOf) {
+    // Relaxation time K / G against a frame: honey's 1.4e-4 s is silent; 1e6 Pa s over the default G (14 s) and lava's
+    // 1e3 over a G lowered by mu_scale to 1e4 Pa (0.1 s, over 24 fps's 0.042 s) are warned of, naming the key.
+    const auto warningsOf = [](const std::string& params, double muScale) {
+        json scene = json::parse(R"({"simulation": {"frames": 2, "fps": 24}, "sets": [{"material": "viscous",
+            "shape": {"type": "sphere", "center": [0, 0.2, 0], "radius": 0.05}}]})");
+        scene["sets"][0]["material_params"] = json::parse(params);
+        scene["sets"][0]["mu_scale"] = muScale;
+        std::string all;
+        for (const std::string& w : sceneWarnings(parseScene(scene.dump(), "liquid.json"))) all += w + "\n";
+        return all;
+    };
+    EXPECT_EQ(warningsOf("{}", 1.0).find("relaxes in"), std::string::npos);
+    const std::string stiff = warningsOf(R"({"viscosity": 1e6})", 1.0);
+    EXPECT_NE(stiff.find("liquid.json: /sets/0/material_params/viscosity: 1e+06 over the shear modulus 70000 Pa relaxes in"),
+              std::string::npos)
+        << stiff;
+    EXPECT_NE(warningsOf(R"({"viscosity": 1e3})", 1.0 / 7.0).find("relaxes in 0.1 s"), std::string::npos);
+}
