@@ -330,7 +330,8 @@ int main(int argc, char** argv) {
     std::string outDir = "docs/performance";
     bool quick = false;
     auto addScene = [&](CLI::App* c) {
-        c->add_option("--material", o.scene.material, "water, jelly, rubber, snow or sand");
+        c->add_option("--material", o.scene.material, "a material of scenes' `material` key")
+            ->check(CLI::IsMember(materialSceneNames()));
         c->add_option("--kernel", o.kernel, "quadratic or cubic")->check(CLI::IsMember({"quadratic", "cubic"}));
         c->add_option("--particles", o.scene.particles, "particle count (rounded to a cube per blob)");
         c->add_option("--threads", o.threads, "worker threads")->check(CLI::PositiveNumber);

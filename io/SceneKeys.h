@@ -192,16 +192,18 @@ void outputKeys(V& v, OutputDesc& o) {
                 "gradient, 3x3), plastic_strain (equivalent plastic strain of metal, the accumulated flow of a viscous liquid)",
             .noun = "point attribute"},
         o.attributes, PointAttributes::names());
-    v.choice(Key{.name = "rank_files",
-                 .help = "on several ranks (mpirun): `gathered` has rank 0 write every frame as one process does (the same "
-                         "files and bits; up to what rank 0's memory holds, about 1.5e8 particles on 24 GiB); `per_rank` has "
-                         "each rank write its own particles into part files `<scene>_NNNN_rankRRR.vdb` (and `_points_`, "
-                         "`.ply` alike) and its part of each checkpoint (`<scene>_checkpoint_NNNN_rankRRR.mpmc`), nothing "
-                         "gathered: load the frame parts together (Houdini: a File SOP per part, merged; Blender: one object "
-                         "each). A surface of parts is each part's own. A set of checkpoint parts resumes on any rank count, "
-                         "one process included; the output directory must be one that every rank sees",
-                 .noun = "rank file layout"},
-             o.rankFiles, std::vector<std::string>{"gathered", "per_rank"});
+    v.choice(
+        Key{.name = "rank_files",
+            .help =
+                "on several ranks (mpirun): `gathered` has rank 0 write every frame as one process does (the same "
+                "files and bits; up to what rank 0's memory holds, about 7e7 particles on 24 GiB with 2 ranks); `per_rank` has "
+                "each rank write its own particles into part files `<scene>_NNNN_rankRRR.vdb` (and `_points_`, "
+                "`.ply` alike) and its part of each checkpoint (`<scene>_checkpoint_NNNN_rankRRR.mpmc`), nothing "
+                "gathered: load the frame parts together (Houdini: a File SOP per part, merged; Blender: one object "
+                "each). A surface of parts is each part's own. A set of checkpoint parts resumes on any rank count, "
+                "one process included; the output directory must be one that every rank sees",
+            .noun = "rank file layout"},
+        o.rankFiles, std::vector<std::string>{"gathered", "per_rank"});
     v.choice(Key{.name = "surface_group",
                  .help = "one `surface` grid, or `surface_<material>` / `surface_<set>` per group",
                  .noun = "surface grouping"},
