@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "materials/SvdBatch.h"
+#include "materials/VonMises.h"
 #include "materials/Water.h"
 
 namespace mpm {
@@ -45,24 +46,8 @@ struct HerschelBulkley {
         float shearModulus = 7.0e4f;  ///< G [Pa]: the elastic regularisation (by default k gamma / 4)
     };
 
-    struct State {
-        std::vector<Mat3f> Fe;
-        std::vector<float> alpha;  ///< equivalent plastic strain, the flow's accumulated strain
-        template <class Fn>
-        void forEachArray(Fn&& f) {
-            f(Fe);
-            f(alpha);
-        }
-        template <class Fn>
-        void forEachArray(Fn&& f) const {
-            f(Fe);
-            f(alpha);
-        }
-        void appendRest(std::size_t n) {
-            Fe.resize(Fe.size() + n, Mat3f::Identity());
-            alpha.resize(alpha.size() + n, 0.0f);
-        }
-    };
+    /// F_E and the equivalent plastic strain alpha (the flow's accumulated strain), as metal keeps them.
+    using State = VonMises::State;
 
     /// G's default as a share of the equation of state's tangent bulk modulus k gamma: a quarter raises the P-wave
     /// speed, and so the cost of a step, by sqrt(1 + 1/3) = 15% over water's, while keeping the relaxation time
