@@ -9,18 +9,32 @@ namespace mpm {
 
 namespace {
 
-/// Central difference of a field's node masses (the direction is all that is used; the spacing drops out).
-/// `massAt(node)` reads the field.
-template <class MassAt>
-Vec3f massGradient(const Vec3i& node, MassAt&& massAt) {
-    Vec3f g;
-    for (int a = 0; a < 3; ++a) {
-        Vec3i up = node, down = node;
-        ++up[a];
-        --down[a];
-        g[a] = 0.5f * (massAt(up) - massAt(down));
+/// The 26 neighbours of a node and the node itself, as offsets.
+constexpr int kStencil = 27;
+Vec3i stencilOffset(int s) { return Vec3i(s / 9 - 1, (s / 3) % 3 - 1, s % 3 - 1); }
+
+/// Gradients of each member body's mass fraction m_b / sum_c m_c at a node, from the 27 nodes around it: a
+/// central difference along each axis averaged across the two others with weights 1, 2, 1 (Sobel's operator in
+/// 3D). The spacing drops out: only the direction is used. A neighbour no member has mass at adds nothing.
+/// `masses(s, out)` gives every member's mass at stencil node s.
+template <class Masses>
+void fractionGradients(std::size_t members, const float* centre, Masses&& masses, std::vector<float>& at,
+                       std::vector<Vec3f>& gradient) {
+    constexpr float kSmooth[3] = {1.0f, 2.0f, 1.0f};
+    gradient.assign(members, Vec3f::Zero());
+    at.resize(members);
+    for (int s = 0; s < kStencil; ++s) {
+        const Vec3i o = stencilOffset(s);
+        if (o.isZero()) continue;
+        masses(s, at);
+        float total = 0.0f;
+        for (float m : at) total += m;
+        if (!(total > 0.0f)) continue;
+        const Vec3f weight(float(o[0]) * kSmooth[o[1] + 1] * kSmooth[o[2] + 1],
+                           float(o[1]) * kSmooth[o[0] + 1] * kSmooth[o[2] + 1],
+                           float(o[2]) * kSmooth[o[0] + 1] * kSmooth[o[1] + 1]);
+        for (std::size_t k = 0; k < members; ++k) gradient[k] += (at[k] / total - centre[k]) * weight;
     }
-    return g;
 }
 
 /// The fields' leaves at one origin (null where a field has none), and whether two or more fields have one.
@@ -69,12 +83,10 @@ FieldContactSummary resolveFieldContact(std::vector<SparseGrid>& fields, float f
                     if (!membersAt(f, n, same, members)) return;
                     const Vec3i node = leaf.origin + leafLocal(n);
                     for (int g : members)
-                        for (int a = 0; a < 3; ++a)
-                            for (int step : {1, -1}) {
-                                Vec3i next = node;
-                                next[a] += step;
-                                if (!remote->local(next)) far[std::size_t(g)].push_back(next);
-                            }
+                        for (int st = 0; st < kStencil; ++st) {
+                            const Vec3i next = node + stencilOffset(st);
+                            if (!remote->local(next)) far[std::size_t(g)].push_back(next);
+                        }
                 });
             }
         for (std::size_t g = 0; g < F; ++g) {
@@ -91,6 +103,7 @@ FieldContactSummary resolveFieldContact(std::vector<SparseGrid>& fields, float f
                 std::vector<const LeafView*> same(F);
                 std::vector<int> members;
                 std::vector<Vec3f> gradient;
+                std::vector<float> fraction, neighbour;
                 for (std::size_t l = begin; l < end; ++l) {
                     const LeafView& leaf = grid.leaf(l);
                     if (!handled(f, l) || !sameLeaves(lookup, f, leaf, same)) continue;
@@ -99,21 +112,31 @@ FieldContactSummary resolveFieldContact(std::vector<SparseGrid>& fields, float f
                         ++acc.nodes;
                         const Vec3i node = leaf.origin + leafLocal(n);
                         float mass = 0.0f;
-                        Vec3f momentum = Vec3f::Zero(), sum = Vec3f::Zero();
-                        gradient.resize(members.size());
+                        Vec3f momentum = Vec3f::Zero();
+                        fraction.resize(members.size());
                         for (std::size_t k = 0; k < members.size(); ++k) {
-                            const std::size_t g = std::size_t(members[k]);
-                            const LeafView& at = *same[g];
+                            const LeafView& at = *same[std::size_t(members[k])];
                             mass += at.mass[n];
                             momentum += at.mass[n] * Eigen::Map<const Vec3f>(at.momentum + 3 * n);
-                            gradient[k] = massGradient(node, [&](const Vec3i& x) {
-                                if (remote && !remote->local(x))
-                                    return farMass[g][std::size_t(std::lower_bound(far[g].begin(), far[g].end(), x, nodeLess) -
-                                                                  far[g].begin())];
-                                return lookup[g].massAt(x, &at);
-                            });
-                            sum += gradient[k];
                         }
+                        for (std::size_t k = 0; k < members.size(); ++k)
+                            fraction[k] = same[std::size_t(members[k])]->mass[n] / mass;
+                        fractionGradients(
+                            members.size(), fraction.data(),
+                            [&](int st, std::vector<float>& m) {
+                                const Vec3i x = node + stencilOffset(st);
+                                for (std::size_t k = 0; k < members.size(); ++k) {
+                                    const std::size_t g = std::size_t(members[k]);
+                                    if (remote && !remote->local(x))
+                                        m[k] = farMass[g][std::size_t(
+                                            std::lower_bound(far[g].begin(), far[g].end(), x, nodeLess) - far[g].begin())];
+                                    else
+                                        m[k] = lookup[g].massAt(x, same[g]);
+                                }
+                            },
+                            neighbour, gradient);
+                        Vec3f sum = Vec3f::Zero();
+                        for (const Vec3f& gk : gradient) sum += gk;
                         const Vec3f vcm = momentum / mass;
                         for (std::size_t k = 0; k < members.size(); ++k) {
                             // Outward normal of body k: towards the others' mass, away from its own.

@@ -7,9 +7,13 @@
 // tangential part relative to v_cm is cut by Coulomb friction mu (v_b - v_cm) . n_b, or removed while the
 // friction covers it. Bodies moving apart are left alone: they part instead of sticking.
 // Normals follow Huang et al. 2011 ("Contact algorithms for the material point method in impact and
-// penetration simulation", IJNME 85): n_b is the unit vector along sum_{c != b} grad m_c - grad m_b, so two
-// bodies at a node get opposite normals and the contact conserves momentum exactly. grad m is the central
-// difference of the node masses. Contact starts where the bodies first share nodes: a volume-fraction test
+// penetration simulation", IJNME 85) in form, n_b along sum_{c != b} grad f_c - grad f_b, so two bodies at a node
+// get opposite normals and the contact conserves momentum exactly; but f_b is body b's share of the node's mass,
+// m_b / sum_c m_c, not its mass, and its gradient is Sobel's smoothed central difference over the 27 nodes around.
+// Measured on two spheres meeting along a diagonal of the grid (R/dx = 8, E = 1e3): the mass's central
+// difference lost 14.4% of the energy (one shared field 14.1%), its Sobel difference 13.4%, the share's 12.8%,
+// the exact normal 12.7%: a sphere's mass thins towards its surface, which turns a mass gradient, not a share's.
+// Contact starts where the bodies first share nodes: a volume-fraction test
 // (Lemiale et al. 2010: contact only where the bodies' volumes fill the node's cell) was measured on the
 // two-sphere case and lost more energy (8.4% against 4.9% at R/dx = 8), the bodies overlapping before it acts.
 #include <functional>

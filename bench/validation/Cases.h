@@ -39,6 +39,20 @@ inline double detailValue(const std::string& detail, const std::string& key) {
     return at == std::string::npos ? std::nan("") : std::stod(detail.substr(at + key.size() + 1));
 }
 
+/// A set's mass, and its mass-weighted centroid and mean velocity.
+struct Centroid {
+    double mass = 0.0;
+    Vec3d x = Vec3d::Zero(), v = Vec3d::Zero();
+};
+inline Centroid centroidOf(const ParticleArrays& P) {
+    Centroid c;
+    for (std::size_t i = 0; i < P.size(); ++i)
+        c.mass += P.mass[i], c.x += P.mass[i] * P.x[i], c.v += P.mass[i] * P.v[i].cast<double>();
+    c.x /= c.mass;
+    c.v /= c.mass;
+    return c;
+}
+
 struct ValidationCase {
     std::string name;
     std::string metric;       ///< what error means, with units

@@ -138,17 +138,8 @@ CaseResult twoSpheres(const CaseConfig& c, ContactModel model) {
     const double e0 = energy();
     const double wall = runUntil(sim, kCollisionEnd);
     // Centroid velocity and position of each sphere (sets 0 and 1, one species each).
-    Vec3d x[2], v[2];
-    for (int b = 0; b < 2; ++b) {
-        const ParticleArrays& P = particlesOf(sim.species()[b]);
-        double m = 0;
-        x[b] = v[b] = Vec3d::Zero();
-        for (std::size_t i = 0; i < P.size(); ++i)
-            m += P.mass[i], x[b] += P.mass[i] * P.x[i], v[b] += P.mass[i] * P.v[i].cast<double>();
-        x[b] /= m;
-        v[b] /= m;
-    }
-    const double parting = (v[1] - v[0]).dot((x[1] - x[0]).normalized());
+    const Centroid a = centroidOf(particlesOf(sim.species()[0])), b = centroidOf(particlesOf(sim.species()[1]));
+    const double parting = (b.v - a.v).dot((b.x - a.x).normalized());
     const double loss = 1.0 - energy() / e0;
     const FrameStats st = sim.measure();
     return finish(sim, wall, loss, loss < 0.05 && parting > 0.0,
