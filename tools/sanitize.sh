@@ -20,7 +20,7 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # resumes are paths only a whole process takes; 1.5 min in all); kill -9 (no code of the killed process runs) and
 # --frames (the resume path of the signal test) stay in Release, at 1.5 min more here.
 slow='^(SceneChecks|Validation|MovingCollider)\.|^Safety\.(Killed|FramesAToB)|'
-slow+='^Ranks\.|^MultiField\.(TwoElastic|ABlock)|^MeshCollider\.WaterAtRest|^VdbCollider\.ARising|^Cli\.ValidateShipped|^RigidRotation\.Apic|^ContinuousSource\.Resuming'
+slow+='^Ranks\.|^MultiField\.(TwoElastic|ABlock|BodiesWithFields)|^MeshCollider\.WaterAtRest|^VdbCollider\.ARising|^Cli\.ValidateShipped|^RigidRotation\.Apic|^ContinuousSource\.Resuming'
 # A timing bound of OpenVDB's band growth (6 s in Release), which the sanitizers' -O1 build of our code cannot speak to.
 slow+='|^Cli\.AVdbColliderInASceneOfHugeCells'
 # Long physics runs whose code paths the suite's shorter contact tests already take (206 s here under ASan, 13 s in Release).
