@@ -6,12 +6,23 @@
 // correction of Tampubolon et al. 2017 (sec. 4.3): log volume removed by projecting to the tip is kept and
 // added back to tr(eps) on later steps, so sand that separated does not over-compress when it lands.
 #include <cmath>
+#include <cstdint>
+#include <span>
+#include <utility>
 #include <vector>
 
 #include "materials/Elastic.h"
 #include "materials/SvdBatch.h"
 
 namespace mpm {
+
+/// Which cone bounds the stress. Drucker-Prager's is Klar et al.'s: round, through Mohr-Coulomb's compression
+/// corners, so it is up to (3 + sin phi) / (3 - sin phi) stronger than Mohr-Coulomb away from them: in plane strain
+/// (a slab between walls) a 32 degree sand shears as a 48 degree one would. Mohr-Coulomb's hexagonal cone holds
+/// the friction angle in every stress state.
+enum class YieldSurface : uint8_t { DruckerPrager, MohrCoulomb };
+inline constexpr Named<YieldSurface> kYieldSurfaces[] = {{YieldSurface::DruckerPrager, "drucker_prager"},
+                                                         {YieldSurface::MohrCoulomb, "mohr_coulomb"}};
 
 struct Sand {
     static constexpr const char* kName = "sand";
@@ -28,6 +39,7 @@ struct Sand {
         // Hardening phi(q) = h0 + (h1 q - h3) exp(-h2 q), in degrees (Klar et al. 2016).
         float h0 = 35.0f, h1 = 9.0f, h2 = 0.2f, h3 = 10.0f;
         bool volumeCorrection = true;
+        YieldSurface surface = YieldSurface::DruckerPrager;
     };
 
     struct State {
@@ -71,6 +83,12 @@ struct Sand {
         v.number(Key{.name = "h3", .help = "hardening h3", .lo = -89.0, .hi = 89.0, .unit = "degrees"}, p.h3);
         v.flag(Key{.name = "volume_correction", .help = "add back the volume lost to tip projections (Tampubolon et al. 2017)"},
                p.volumeCorrection);
+        v.choice(Key{.name = "yield_surface",
+                     .help = "drucker_prager: Klar et al.'s round cone, through Mohr-Coulomb's compression corners (stronger "
+                             "elsewhere: a slab in plane strain shears as if phi were about 1.5 times larger); mohr_coulomb: "
+                             "the friction angle holds in every stress state",
+                     .noun = "yield surface"},
+                 p.surface, std::span<const Named<YieldSurface>>(kYieldSurfaces));
     }
     static void scaleStiffness(Params& p, double lambdaScale, double muScale) { scaleLame(p.mu, p.lambda, lambdaScale, muScale); }
 
@@ -99,6 +117,48 @@ struct Sand {
         // Case III, onto the cone. Here tr <= 0 and dgamma > 0, so devNorm > 0: Klar's "|eps_hat| = 0"
         // test only guards this division, and pure compression (devNorm = 0) is elastic, not the tip.
         return {eps - dgamma / devNorm * dev, dgamma, Case::Cone};
+    }
+
+    /// Cohesionless Mohr-Coulomb with zero dilatancy in principal Hencky strains: de Souza Neto, Peric and Owen
+    /// 2008, Computational Methods for Plasticity, sec. 8.2.2 (return to the main plane, else to the edge it
+    /// crossed), with psi = 0 so that, as in project(), the plastic flow keeps the volume, and tension goes to the
+    /// tip. With t = 2 mu eps + lambda tr(eps), t1 >= t2 >= t3, a plane is f_ij = (t_i - t_j) + (t_i + t_j) sin phi <= 0
+    /// and its flow takes d from eps_i and gives it to eps_j, which lowers f_ij by 4 mu d.
+    static Projection projectMohrCoulomb(const Params& m, const Vec3f& eps, float sinPhi) {
+        const float tr = eps.sum();
+        if (tr > 0.0f) return {Vec3f::Zero(), eps.norm(), Case::Tip};
+        int k[3] = {0, 1, 2};  // eps[k[0]] >= eps[k[1]] >= eps[k[2]]: the stresses order alike
+        if (eps[k[0]] < eps[k[1]]) std::swap(k[0], k[1]);
+        if (eps[k[1]] < eps[k[2]]) std::swap(k[1], k[2]);
+        if (eps[k[0]] < eps[k[1]]) std::swap(k[0], k[1]);
+        const float e1 = eps[k[0]], e2 = eps[k[1]], e3 = eps[k[2]];
+        const float twoMu = 2.0f * m.mu, lt = m.lambda * tr;
+        const float t1 = twoMu * e1 + lt, t2 = twoMu * e2 + lt, t3 = twoMu * e3 + lt;
+        const auto plane = [sinPhi](float ti, float tj) { return (ti - tj) + (ti + tj) * sinPhi; };
+        const float f13 = plane(t1, t3);
+        if (f13 <= 0.0f) return {eps, 0.0f, Case::Elastic};
+        // The strain each principal direction gives up, in sorted order.
+        Vec3f d;
+        const float main = f13 / (2.0f * twoMu);
+        // Two planes at once (an edge): solve 2 mu [[2, c], [c, 2]] (x, y) = (f13, f), c the planes' coupling.
+        const auto edge = [&](float f, float c, float& x, float& y) {
+            const float det = twoMu * (4.0f - c * c);
+            x = (2.0f * f13 - c * f) / det;
+            y = (2.0f * f - c * f13) / det;
+            return x >= 0.0f && y >= 0.0f;
+        };
+        float x = 0.0f, y = 0.0f;
+        if (e1 - main >= e2 && e3 + main <= e2)
+            d = Vec3f(main, 0.0f, -main);  // the main plane, the order kept
+        else if (e1 - main < e2 && edge(plane(t2, t3), 1.0f - sinPhi, x, y) && e2 - y >= e3 + x + y)
+            d = Vec3f(x, y, -(x + y));  // the edge where the two largest meet: planes 13 and 23
+        else if (edge(plane(t1, t2), 1.0f + sinPhi, x, y) && e1 - x - y >= e2 + y)
+            d = Vec3f(x + y, -y, -x);  // the edge where the two smallest meet: planes 13 and 12
+        else
+            d = Vec3f(e1, e2, e3) - Vec3f::Constant(tr / kDim);  // onto the axis at the same pressure
+        Vec3f H = eps;
+        for (int a = 0; a < 3; ++a) H[k[a]] -= d[a];
+        return {H, d.norm(), Case::Cone};
     }
 
     template <class T>
@@ -141,7 +201,9 @@ struct Sand {
     static void returnMap(const Params& m, State& s, std::size_t i, const Svd3<float>& d) {
         Vec3f eps = d.sigma.array().abs().max(1e-12f).log().matrix();
         if (m.volumeCorrection) eps += Vec3f::Constant(s.logVc[i] / kDim);
-        const Projection p = project(m, eps, s.alpha[i]);
+        const Projection p = m.surface == YieldSurface::MohrCoulomb
+                                 ? projectMohrCoulomb(m, eps, std::sin(frictionAngleDegrees(m, s.q[i]) * float(M_PI) / 180.0f))
+                                 : project(m, eps, s.alpha[i]);
         s.Fe[i] = d.U * p.H.array().exp().matrix().asDiagonal() * d.V.transpose();
         if (m.volumeCorrection) s.logVc[i] = eps.sum() - p.H.sum();
         s.q[i] += p.dq;

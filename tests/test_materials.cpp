@@ -3,6 +3,8 @@
 // return-mapping cases, hardening and volume correction.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <functional>
 #include <random>
 
 #include "core/Species.h"
@@ -328,6 +330,76 @@ TEST(SandModel, ReturnMappingCases) {
     // Friction angle hardens monotonically from 25 degrees over the early plastic strain (Klar Fig. 5).
     EXPECT_NEAR(Sand::frictionAngleDegrees(m, 0.0f), 25.0f, 1e-5f);
     for (float q = 0.0f; q < 5.0f; q += 0.1f) EXPECT_GT(Sand::alphaOf(m, q + 0.1f), Sand::alphaOf(m, q));
+}
+
+namespace {
+/// The principal Kirchhoff stresses of Hencky log strains eps (sand's elasticity), largest first.
+Vec3f sortedStress(const Sand::Params& m, const Vec3f& eps) {
+    Vec3f t = 2.0f * m.mu * eps + Vec3f::Constant(m.lambda * eps.sum());
+    std::sort(t.data(), t.data() + 3, std::greater<float>());
+    return t;
+}
+}  // namespace
+
+TEST(SandModel, MohrCoulombReturnLandsOnTheHexagonKeepingTheVolume) {
+    // Cohesionless Mohr-Coulomb: (t1 - t3) + (t1 + t3) sin(phi) <= 0 for the largest and smallest principal
+    // stresses, whatever the middle one. Trial strains from every sextant and both edges: each lands on the
+    // surface (to float round-off of the stresses, 1e-5 of their size), keeps its trace (zero dilatancy) and
+    // keeps the order of its principal directions; the plastic strain is the strain removed.
+    Sand::Params m;
+    const float s = std::sin(32.0f * float(M_PI) / 180.0f);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-0.03f, 0.01f);
+    int returned = 0;
+    for (int n = 0; n < 2000; ++n) {
+        Vec3f eps(u(rng), u(rng), u(rng));
+        if (n % 3 == 1) eps[1] = eps[0];  // on an edge of the hexagon already
+        const Sand::Projection p = Sand::projectMohrCoulomb(m, eps, s);
+        if (eps.sum() > 0.0f) {
+            EXPECT_EQ(p.which, Sand::Case::Tip);
+            continue;
+        }
+        const Vec3f t = sortedStress(m, p.H), t0 = sortedStress(m, eps);
+        const float f = (t[0] - t[2]) + (t[0] + t[2]) * s, scale = t0.cwiseAbs().maxCoeff();
+        if (p.which == Sand::Case::Elastic) {
+            EXPECT_LE((t0[0] - t0[2]) + (t0[0] + t0[2]) * s, 0.0f);
+            EXPECT_EQ(p.H, eps);
+            continue;
+        }
+        ++returned;
+        EXPECT_NEAR(f, 0.0f, 1e-5f * scale) << eps.transpose();
+        EXPECT_NEAR(p.H.sum(), eps.sum(), 1e-6f) << eps.transpose();
+        EXPECT_NEAR(p.dq, (eps - p.H).norm(), 1e-6f);
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+                if (eps[a] > eps[b]) EXPECT_GE(p.H[a], p.H[b] - 1e-6f) << eps.transpose();
+    }
+    EXPECT_GT(returned, 500);
+}
+
+TEST(SandModel, MohrCoulombHoldsTheFrictionAngleWhereDruckerPragerIsStronger) {
+    // In triaxial compression (t1 = t2 > t3) Klar's round cone and Mohr-Coulomb's hexagon meet: both return to
+    // (t1 - t3) / -(t1 + t3) = sin(phi). In plane strain at zero dilatancy the middle stress is the mean of the
+    // others (pure shear), where the hexagon still holds sin(phi) but the cone holds more.
+    Sand::Params m;
+    m.h0 = 32.0f, m.h1 = 0.0f, m.h3 = 0.0f;
+    const float s = std::sin(32.0f * float(M_PI) / 180.0f), alpha = Sand::alphaOf(m, 0.0f);
+    const auto ratio = [&](const Vec3f& H) {
+        const Vec3f t = sortedStress(m, H);
+        return (t[0] - t[2]) / -(t[0] + t[2]);
+    };
+    // Triaxial compression: squeezed along z beyond yield, the two others equal.
+    const Vec3f triaxial(0.002f, 0.002f, -0.03f);
+    EXPECT_NEAR(ratio(Sand::projectMohrCoulomb(m, triaxial, s).H), s, 1e-4f);
+    EXPECT_NEAR(ratio(Sand::project(m, triaxial, alpha).H), s, 1e-4f);
+    // Pure shear in the x-y plane at a pressure: eps = (-p + g, -p - g, -p).
+    const Vec3f shear(-0.01f + 0.02f, -0.01f - 0.02f, -0.01f);
+    EXPECT_NEAR(ratio(Sand::projectMohrCoulomb(m, shear, s).H), s, 1e-4f);
+    const float cone = ratio(Sand::project(m, shear, alpha).H);
+    // Klar's cone at Lode angle 0: |dev t| = sqrt(2) g', t1 - t3 = 2 g', -(t1 + t3) = 2 p', and |dev t| = -alpha tr t
+    // = 3 alpha p', so the ratio is 3 alpha / sqrt(2): 0.743 for 32 degrees, the sin of 48 degrees.
+    EXPECT_NEAR(cone, 3.0f * alpha / std::sqrt(2.0f), 1e-4f);
+    EXPECT_GT(cone, 1.35f * s);
 }
 
 TEST(SandModel, VolumeCorrectionRestoresVolumeLostUnderTension) {

@@ -69,6 +69,9 @@ void setSceneDirectory(const std::string& dir);
 
 /// All cases, in the order of docs/validation/cases.md.
 const std::vector<ValidationCase>& cases();
+/// Case 13: planar sand columns of the aspect ratios given collapse with either yield surface; detail gives each
+/// run-out against Lube et al. 2005's law as ratio_a<aspect>.
+CaseResult planarColumnCollapse(const CaseConfig& c, YieldSurface surface, const std::vector<double>& aspects);
 const ValidationCase& findCase(const std::string& name);
 
 }  // namespace mpm::validation
