@@ -18,8 +18,9 @@ namespace mpm {
 
 /// Which cone bounds the stress. Drucker-Prager's is Klar et al.'s: round, through Mohr-Coulomb's compression
 /// corners, so it is up to (3 + sin phi) / (3 - sin phi) stronger than Mohr-Coulomb away from them: in plane strain
-/// (a slab between walls) a 32 degree sand shears as a 48 degree one would. Mohr-Coulomb's hexagonal cone holds
-/// the friction angle in every stress state.
+/// (a slab between walls) a 32 degree sand shears as a 48 degree one would. Mohr-Coulomb's hexagonal cone bounds
+/// every stress state by the friction angle; at zero dilatancy a layer sheared along its length (a slope) yields
+/// at tan(slope) = sin(phi), 28 degrees for phi 32.
 enum class YieldSurface : uint8_t { DruckerPrager, MohrCoulomb };
 inline constexpr Named<YieldSurface> kYieldSurfaces[] = {{YieldSurface::DruckerPrager, "drucker_prager"},
                                                          {YieldSurface::MohrCoulomb, "mohr_coulomb"}};
@@ -86,7 +87,8 @@ struct Sand {
         v.choice(Key{.name = "yield_surface",
                      .help = "drucker_prager: Klar et al.'s round cone, through Mohr-Coulomb's compression corners (stronger "
                              "elsewhere: a slab in plane strain shears as if phi were about 1.5 times larger); mohr_coulomb: "
-                             "the friction angle holds in every stress state",
+                             "Mohr-Coulomb's hexagon, phi in every stress state (a layer on a slope, at zero dilatancy, "
+                             "flows above tan(slope) = sin(phi))",
                      .noun = "yield surface"},
                  p.surface, std::span<const Named<YieldSurface>>(kYieldSurfaces));
     }
