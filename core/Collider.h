@@ -109,6 +109,14 @@ struct ColliderContext {
     virtual ~ColliderContext() = default;
 };
 
+/// What a collider's pass over one leaf gave the material: the work a prescribed motion did on it, or, for a
+/// dynamic body (core/RigidBody.h), the impulse and the angular impulse about the body's centre of mass.
+struct ColliderExchange {
+    double work = 0.0;              ///< [J] impulse times the collider's velocity (prescribed motion only)
+    Vec3d impulse = Vec3d::Zero();  ///< [N s] sum of m dv (dynamic bodies only)
+    Vec3d angular = Vec3d::Zero();  ///< [N m s] sum of (x - centre) x m dv (dynamic bodies only)
+};
+
 class Collider {
 public:
     Collider(Boundary boundary, float friction) : boundary_(boundary), friction_(friction) {}
@@ -123,6 +131,8 @@ public:
 
     /// Whether the collider moves (then it does work on the material, counted by the energy check).
     virtual bool moving() const { return false; }
+    /// Whether it is a rigid body the material moves: its passes report the momentum they exchange instead of work.
+    virtual bool dynamic() const { return false; }
     /// Called once before each substep's collider passes, serially, with their time: a collider that changes
     /// over time (a sequence of level sets) loads what that time needs here.
     virtual void prepare(double /*t*/) {}
@@ -131,9 +141,9 @@ public:
     /// Applies the boundary condition at time t to every node in `box` of a leaf with phi <= 0 and nonzero mass
     /// (for a `separate` wall, only where `surface` says the material has reached it), with Coulomb friction per
     /// contact patch (FrictionPatches). A leaf whose centre lies farther from the surface than its half diagonal is skipped (phi
-    /// is 1-Lipschitz). Returns the work a moving collider did on the nodes (its impulse times its velocity).
-    virtual double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
-                               const SurfaceContact& surface) const = 0;
+    /// is 1-Lipschitz). Returns what it gave the nodes: a moving collider's work, a dynamic body's impulses.
+    virtual ColliderExchange applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
+                                         const SurfaceContact& surface) const = 0;
 
     /// A node with mass near the surface whose mirror image across it, x - 2 phi n, is a grid node (a wall on the
     /// grid's lines or halfway between), for the mirror passes (simulation.wall_ghosts = "mirror").
@@ -151,8 +161,9 @@ public:
 
     /// What the particle pass did to one leaf's particles.
     struct ProjectionResult {
-        double work = 0.0;      ///< work a moving collider did (impulse times its velocity, and lifting against gravity)
-        float maxSpeed = 0.0f;  ///< of the particles it moved
+        double work = 0.0;  ///< work a moving collider did (impulse times its velocity, and lifting against gravity)
+        Vec3d impulse = Vec3d::Zero(), angular = Vec3d::Zero();  ///< a dynamic body's, as ColliderExchange's
+        float maxSpeed = 0.0f;                                   ///< of the particles it moved
         std::size_t moved = 0;
     };
     /// After advection: particles [begin, end) of a leaf found inside the collider at time t (or, for a wall

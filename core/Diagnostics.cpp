@@ -85,10 +85,16 @@ FrameStats measureParticles(const std::vector<AnySpecies>& species, double dx, f
     return sumParticles(species, dx, inertiaScale, gravity).stats();
 }
 
-std::string FrameStats::csvHeader() {
-    return "frame,time,particles,mass,momentum_x,momentum_y,momentum_z,angular_momentum_x,angular_momentum_y,"
-           "angular_momentum_z,kinetic_energy,elastic_energy,gravity_energy,max_speed,min_J,max_J,active_leaves,grid_bytes,"
-           "substeps,retries,step_dt,step_limit,wall_seconds";
+std::string FrameStats::csvHeader(std::size_t bodies) {
+    std::string h =
+        "frame,time,particles,mass,momentum_x,momentum_y,momentum_z,angular_momentum_x,angular_momentum_y,"
+        "angular_momentum_z,kinetic_energy,elastic_energy,gravity_energy,max_speed,min_J,max_J,active_leaves,grid_bytes,"
+        "substeps,retries,step_dt,step_limit,wall_seconds";
+    static const char* const kBodyColumns[RigidBodyState::kDoubles] = {"x",  "y",  "z",  "qw", "qx", "qy", "qz",
+                                                                       "vx", "vy", "vz", "wx", "wy", "wz"};
+    for (std::size_t k = 0; k < bodies; ++k)
+        for (const char* c : kBodyColumns) h += ",body" + std::to_string(k) + "_" + c;
+    return h;
 }
 
 std::string FrameStats::csvRow() const {
@@ -106,7 +112,17 @@ std::string FrameStats::csvRow() const {
         for (char c : limit) q += c == '"' ? std::string("\"\"") : std::string(1, c);
         limit = q + "\"";
     }
-    return std::string(buf) + dt + limit + wall;
+    std::string row = std::string(buf) + dt + limit + wall;
+    for (const RigidBodyState& b : bodies) {
+        double v[RigidBodyState::kDoubles];
+        b.write(v);
+        for (double x : v) {
+            char cell[32];
+            std::snprintf(cell, sizeof(cell), ",%.9g", x);
+            row += cell;
+        }
+    }
+    return row;
 }
 
 }  // namespace mpm

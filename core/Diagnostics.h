@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/ExactSum.h"
+#include "core/RigidBody.h"
 #include "core/Species.h"
 
 namespace mpm {
@@ -32,11 +33,15 @@ struct FrameStats {
     double stepDt = 0.0;
     std::string stepLimit;
     double wallSeconds = 0.0;
+    /// The dynamic colliders at the frame's end, in collider order: columns body<k>_* after the others.
+    std::vector<RigidBodyState> bodies;
 
     /// Kinetic + stored + gravitational: without external work and dissipation it is constant.
     double totalEnergy() const { return kineticEnergy + elasticEnergy + gravityEnergy; }
 
-    static std::string csvHeader();
+    /// The columns; a scene with rigid bodies adds, per body k, its centre of mass body<k>_x, _y, _z, orientation
+    /// quaternion _qw, _qx, _qy, _qz, velocity _vx, _vy, _vz and angular velocity _wx, _wy, _wz.
+    static std::string csvHeader(std::size_t bodies = 0);
     std::string csvRow() const;
 };
 

@@ -17,11 +17,23 @@ std::vector<std::unique_ptr<ColliderContext>> contextsFor(const std::vector<std:
 }
 }  // namespace
 
+std::vector<BodyImpulse> bodyImpulsesFor(const std::vector<std::unique_ptr<Collider>>& colliders) {
+    const bool any = std::any_of(colliders.begin(), colliders.end(), [](const auto& c) { return c->dynamic(); });
+    return std::vector<BodyImpulse>(any ? colliders.size() : 0);
+}
+
+void addBodyImpulses(std::vector<BodyImpulse>& a, const std::vector<BodyImpulse>& b) {
+    if (a.empty()) a.resize(b.size());
+    for (std::size_t c = 0; c < b.size(); ++c) a[c] += b[c];
+}
+
 GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<std::unique_ptr<Collider>>& colliders,
                                       const Vec3f& g, float dt, double tEnd, const SurfaceContact& surface, bool toVelocity,
                                       const std::vector<uint8_t>* owned) {
+    GridUpdateResult none;
+    none.bodies = bodyImpulsesFor(colliders);
     return reduceLeafRanges(
-        grid.leafCount(), LeafGrain::Nodes, GridUpdateResult{},
+        grid.leafCount(), LeafGrain::Nodes, none,
         [&](std::size_t begin, std::size_t end, GridUpdateResult& acc) {
             const auto contexts = contextsFor(colliders);
             for (std::size_t l = begin; l < end; ++l) {
@@ -40,8 +52,12 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
                             v.setZero();
                     });
                 const SurfaceContact leafSurface = surface.ofLeaf(l);
-                for (std::size_t c = 0; c < colliders.size(); ++c)
-                    acc.work += colliders[c]->applyToLeaf(leaf, box, grid.dx(), tEnd, contexts[c].get(), leafSurface);
+                for (std::size_t c = 0; c < colliders.size(); ++c) {
+                    const ColliderExchange e =
+                        colliders[c]->applyToLeaf(leaf, box, grid.dx(), tEnd, contexts[c].get(), leafSurface);
+                    acc.work += e.work;
+                    if (!acc.bodies.empty() && colliders[c]->dynamic()) acc.bodies[c].add(e.impulse, e.angular);
+                }
                 box.forEach([&](int n) {
                     if (leaf.mass[n] != 0.0f)
                         acc.maxSpeed = std::max(acc.maxSpeed, Eigen::Map<const Vec3f>(leaf.momentum + 3 * n).norm());
@@ -51,6 +67,7 @@ GridUpdateResult updateGridVelocities(const SparseGrid& grid, const std::vector<
         [](GridUpdateResult a, const GridUpdateResult& b) {
             a.maxSpeed = std::max(a.maxSpeed, b.maxSpeed);
             a.work += b.work;
+            addBodyImpulses(a.bodies, b.bodies);
             return a;
         });
 }
@@ -65,6 +82,7 @@ bool crossesWall(float normalSpeed, float dt, double dx) { return std::abs(doubl
 /// held nodes' normal impulse, which the fold's images take over, so a mirrored slip floor lost most of its
 /// friction (a block on it, gravity tilted 30 degrees, mu 0.7, slid 3-6 cells where it must hold).
 bool mirrors(const Collider& c) {
+    if (c.dynamic()) return false;  // a body's impulse is summed in the collider pass alone
     return c.boundary() == Boundary::Sticky || (c.boundary() == Boundary::Slip && c.friction() == 0.0f);
 }
 
@@ -209,8 +227,10 @@ ProjectionSummary projectOutOfColliders(const SparseGrid& grid, std::vector<AnyS
                                         const Vec3d& gravity) {
     if (colliders.empty()) return {};
     const std::vector<uint32_t>& leaves = grid.particleLeaves();
+    ProjectionSummary none;
+    none.bodies = bodyImpulsesFor(colliders);
     return reduceLeafRanges(
-        leaves.size(), LeafGrain::Particles, ProjectionSummary{},
+        leaves.size(), LeafGrain::Particles, none,
         [&](std::size_t begin, std::size_t end, ProjectionSummary& acc) {
             const auto contexts = contextsFor(colliders);
             for (std::size_t i = begin; i < end; ++i) {
@@ -223,6 +243,7 @@ ProjectionSummary projectOutOfColliders(const SparseGrid& grid, std::vector<AnyS
                                     sp.p, sp.leafStart[l], sp.leafStart[l + 1], grid.leaf(l).origin, grid.dx(), tEnd, dt, gravity,
                                     contexts[c].get());
                                 acc.work += r.work;
+                                if (!acc.bodies.empty() && colliders[c]->dynamic()) acc.bodies[c].add(r.impulse, r.angular);
                                 acc.maxSpeed = std::max(acc.maxSpeed, r.maxSpeed);
                                 acc.moved += r.moved;
                             }
@@ -232,6 +253,7 @@ ProjectionSummary projectOutOfColliders(const SparseGrid& grid, std::vector<AnyS
         },
         [](ProjectionSummary a, const ProjectionSummary& b) {
             a.work += b.work;
+            addBodyImpulses(a.bodies, b.bodies);
             a.maxSpeed = std::max(a.maxSpeed, b.maxSpeed);
             a.moved += b.moved;
             return a;

@@ -8,6 +8,7 @@
 
 #include "core/Collider.h"
 #include "core/ExactSum.h"
+#include "core/RigidBody.h"
 #include "core/Species.h"
 #include "sparse/SparseGrid.h"
 
@@ -16,7 +17,14 @@ namespace mpm {
 struct GridUpdateResult {
     float maxSpeed = 0.0f;  ///< largest node speed
     ExactSum work;          ///< work moving colliders did on the nodes (exact: the same bits on any split)
+    /// Per collider, what a dynamic one gave the nodes; empty when no collider is dynamic.
+    std::vector<BodyImpulse> bodies;
 };
+
+/// Per collider, an empty exchange where some collider is a dynamic body; else no list at all (nothing to sum).
+std::vector<BodyImpulse> bodyImpulsesFor(const std::vector<std::unique_ptr<Collider>>& colliders);
+/// a += b, collider by collider (b empty: nothing).
+void addBodyImpulses(std::vector<BodyImpulse>& a, const std::vector<BodyImpulse>& b);
 
 /// Turns momentum into velocity on every written node, adds gravity, applies the colliders at time tEnd.
 /// With `toVelocity` false the nodes already hold velocities and only the colliders act (multi-field contact
@@ -79,8 +87,9 @@ std::size_t foldWallImages(const SparseGrid& grid, const MirrorWalls& walls, con
 std::size_t mirrorGhostNodes(const SparseGrid& grid, const MirrorWalls& walls, float dt, const RemoteNodes* remote = nullptr);
 
 struct ProjectionSummary {
-    ExactSum work;          ///< work moving colliders did on the particles they moved
-    float maxSpeed = 0.0f;  ///< of those particles
+    ExactSum work;                    ///< work moving colliders did on the particles they moved
+    std::vector<BodyImpulse> bodies;  ///< per collider, what a dynamic one gave the particles (as GridUpdateResult's)
+    float maxSpeed = 0.0f;            ///< of those particles
     std::size_t moved = 0;
 };
 

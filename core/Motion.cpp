@@ -27,11 +27,20 @@ Motion Motion::keyframes(std::vector<Key> keys, const Vec3d& pivot, double fps) 
     return m;
 }
 
+Motion Motion::dynamic(std::shared_ptr<const BodyFrame> frame) {
+    Motion m;
+    m.kind_ = Kind::Dynamic;
+    m.frame_ = std::move(frame);
+    return m;
+}
+
 Pose Motion::at(double t) const {
     Pose pose;
     switch (kind_) {
         case Kind::None:
             return pose;
+        case Kind::Dynamic:
+            return frame_->pose;
         case Kind::Constant: {
             const double angle = angular_.norm() * t;
             pose.R = angle > 0.0 ? Eigen::AngleAxisd(angle, angular_.normalized()).toRotationMatrix() : Mat3d::Identity();
@@ -62,6 +71,11 @@ Motion::Rates Motion::ratesAt(double t) const {
     Rates r;
     switch (kind_) {
         case Kind::None:
+            return r;
+        case Kind::Dynamic:
+            // v_c(x) = v + w x (x - c), which velocityAt writes about the pose's origin T.
+            r.angular = frame_->angular;
+            r.linear = frame_->linear + frame_->angular.cross(frame_->pose.T - frame_->centre);
             return r;
         case Kind::Constant:
             // T(t) = pivot + v t - R pivot, so dT/dt = v - w x (R pivot) and v_c(x) = v + w x (x - pivot - v t).

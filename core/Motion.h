@@ -5,9 +5,12 @@
 //    x(t) = pivot + v t + Rot(w t) (x_rest - pivot);
 //  - keyframes: at frame f_k the pivot is at position p_k and the body turned by rotation q_k,
 //    x(f) = p(f) + R(f) (x_rest - pivot), p linear and R spherical linear (slerp) between keys, held before
-//    the first key and after the last; frames may be fractional.
+//    the first key and after the last; frames may be fractional;
+//  - dynamic: a rigid body the material moves (core/RigidBody.h); the simulation poses it before each substep's
+//    collider passes, and the motion reads that pose whatever the time asked.
 // The velocity of a point x of the collider is v_c(x) = dT/dt + w x (x - T') with w the angular velocity,
 // which is what sticky, slip, separate and friction act relative to.
+#include <memory>
 #include <vector>
 
 #include "core/Types.h"
@@ -24,6 +27,14 @@ struct Pose {
 /// A rotation as a scene gives it: an axis (any length but zero) and an angle in degrees.
 Mat3d rotationFromAxisDegrees(const Vec3d& axis, double degrees);
 
+/// A dynamic body's pose and velocity for the collider passes under way: its centre of mass moves at `linear`
+/// and it turns at `angular` about it.
+struct BodyFrame {
+    Pose pose;
+    Vec3d centre = Vec3d::Zero();  ///< of mass, in the world
+    Vec3d linear = Vec3d::Zero(), angular = Vec3d::Zero();
+};
+
 class Motion {
 public:
     struct Key {
@@ -37,6 +48,12 @@ public:
     static Motion constant(const Vec3d& velocity, const Vec3d& angularVelocity, const Vec3d& pivot);
     /// Keys sorted by frame (at least one); fps turns frames into time.
     static Motion keyframes(std::vector<Key> keys, const Vec3d& pivot, double fps);
+    /// A body the material moves: the pose is whatever `frame` holds when asked.
+    static Motion dynamic(std::shared_ptr<const BodyFrame> frame);
+
+    bool dynamic() const { return kind_ == Kind::Dynamic; }
+    /// The point a dynamic body's angular impulse is taken about: its centre of mass (the origin for the others).
+    Vec3d momentCentre() const { return frame_ ? frame_->centre : Vec3d::Zero(); }
 
     bool moving() const { return kind_ != Kind::None; }
     Pose at(double t) const;
@@ -48,10 +65,11 @@ public:
     Vec3d velocityAt(const Vec3d& x, const Pose& pose, const Rates& r) const { return r.linear + r.angular.cross(x - pose.T); }
 
 private:
-    enum class Kind { None, Constant, Keyframes } kind_ = Kind::None;
+    enum class Kind { None, Constant, Keyframes, Dynamic } kind_ = Kind::None;
     Vec3d velocity_ = Vec3d::Zero(), angular_ = Vec3d::Zero(), pivot_ = Vec3d::Zero();
     std::vector<Key> keys_;
     double fps_ = 24.0;
+    std::shared_ptr<const BodyFrame> frame_;
 };
 
 }  // namespace mpm

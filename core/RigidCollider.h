@@ -55,6 +55,7 @@ public:
 
     const Geometry& geometry() const { return geometry_; }
     bool moving() const override { return motion_.moving() || Geometry::kDeforming; }
+    bool dynamic() const override { return motion_.dynamic(); }
     void prepare(double t) override { geometry_.prepare(t); }
 
     double signedDistance(const Vec3d& x, double t) const override {
@@ -83,12 +84,13 @@ public:
 
     std::unique_ptr<ColliderContext> makeContext() const override { return std::make_unique<Context>(geometry_); }
 
-    double applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
-                       const SurfaceContact& surface) const override {
-        if (box.empty()) return 0.0;
+    ColliderExchange applyToLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, ColliderContext* context,
+                                 const SurfaceContact& surface) const override {
+        ColliderExchange out;
+        if (box.empty()) return out;
         typename Geometry::Context& c = static_cast<Context*>(context)->geometry;
         Frame f;
-        if (!frameNear(leaf.origin, dx, t, c, nodeReach(dx), f)) return 0.0;
+        if (!frameNear(leaf.origin, dx, t, c, nodeReach(dx), f)) return out;
         const bool still = f.still;
         // The normal condition node by node; Coulomb friction after, patch by patch (FrictionPatches).
         struct Pressed {
@@ -98,7 +100,19 @@ public:
         Pressed pressed[kLeafNodes];
         int count = 0;
         FrictionPatches patches;
-        double work = 0.0;
+        const bool body = motion_.dynamic();
+        const Vec3d centre = motion_.momentCentre();
+        // What the node gained: a dynamic body loses it; a prescribed motion did J . v_c of work (what the node
+        // gains less what the inelastic contact dissipates), counted as external.
+        const auto gave = [&](int n, const Vec3d& x, const Vec3f& dv, const Vec3f& vc) {
+            if (body) {
+                const Vec3d dp = double(leaf.mass[n]) * dv.template cast<double>();
+                out.impulse += dp;
+                out.angular += (x - centre).cross(dp);
+            } else if (!still) {
+                out.work += double(leaf.mass[n]) * dv.template cast<double>().dot(vc.template cast<double>());
+            }
+        };
         box.forEach([&](int n) {
             const float m = leaf.mass[n];
             if (m == 0.0f) return;
@@ -136,20 +150,16 @@ public:
                     pressed[count++] = {n, vc, vt};
                 }
             }
-            // A moving collider does work on the material: its impulse times its own velocity, J . v_c (what the
-            // node gains less what the inelastic contact dissipates), counted as external.
-            if (!still) work += double(m) * (v - before).template cast<double>().dot(vc.template cast<double>());
+            gave(n, x, v - before, vc);
         });
         for (int k = 0; k < count; ++k) {
             const Pressed& p = pressed[k];
             const float keep = patches.keep(p.node, friction());
             Eigen::Map<Vec3f> v(leaf.momentum + 3 * p.node);
             v = p.vc + keep * p.vt;
-            if (!still)
-                work +=
-                    double(leaf.mass[p.node]) * ((keep - 1.0f) * p.vt).template cast<double>().dot(p.vc.template cast<double>());
+            gave(p.node, (leaf.origin + leafLocal(p.node)).template cast<double>() * dx, (keep - 1.0f) * p.vt, p.vc);
         }
-        return work;
+        return out;
     }
 
     void wallNodesOfLeaf(const LeafView& leaf, const NodeBox& box, double dx, double t, double reach, ColliderContext* context,
@@ -190,6 +200,8 @@ public:
         const Motion::Rates& rates = f.rates;
         const bool still = f.still;
         const double thinnest = geometry_.thinnest();
+        const bool body = motion_.dynamic();
+        const Vec3d centre = motion_.momentCentre();
         for (uint32_t p = begin; p < end; ++p) {
             Vec3d& x = P.x[p];
             Vec3f& v = P.v[p];
@@ -222,7 +234,14 @@ public:
             const Vec3f rel = v - vc;
             if (rel.dot(n.cast<float>()) < 0.0f || boundary() == Boundary::Sticky)
                 v = respond(v, n.cast<float>(), vc, boundary(), friction());
-            if (!still) {
+            if (body) {
+                // The body takes what the particle gained: momentum m dv, and angular momentum, in which moving it out
+                // counts too (r x m v before and after).
+                const double m = double(P.mass[p]);
+                out.impulse += m * (v - before).template cast<double>();
+                out.angular += (moved - centre).cross(m * v.template cast<double>()) -
+                               (x - centre).cross(m * before.template cast<double>());
+            } else if (!still) {
                 // As on the nodes, J . v_c; and moving the particle out against gravity is work too.
                 const double impulse = double(P.mass[p]) * (v - before).template cast<double>().dot(vc.template cast<double>());
                 out.work += impulse - double(P.mass[p]) * gravity.dot(moved - x);

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/RigidBody.h"
 #include "core/Species.h"
 
 namespace mpm {
@@ -40,6 +41,7 @@ struct SimState {
     std::vector<int64_t> streamLayers;
     StepBounds bounds;
     EnergyReference energy;
+    std::vector<RigidBodyState> bodies;  ///< the dynamic colliders', in collider order
 
     /// Everything but the particles: the scalars, and each species' name and parameters with no particle.
     SimState withoutParticles() const {
@@ -47,6 +49,7 @@ struct SimState {
         out.time = time, out.frame = frame, out.substeps = substeps, out.frameSubsteps = frameSubsteps;
         out.nextId = nextId, out.emittedFrame = emittedFrame, out.retries = retries;
         out.streamFlow = streamFlow, out.streamLayers = streamLayers, out.bounds = bounds, out.energy = energy;
+        out.bodies = bodies;
         for (const AnySpecies& s : species)
             std::visit(
                 [&](const auto& sp) {

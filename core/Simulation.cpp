@@ -173,7 +173,11 @@ void Simulation::restore(SimState state, bool share) {
     for (const Emitter& e : emitters_)
         if (e.released && state.emittedFrame < e.lastEmission())
             throw std::logic_error("restore: an emitter whose samples were released would emit again; restore before emitting");
+    if (state.bodies.size() != bodies_.size())
+        throw std::invalid_argument("restore: the state has " + std::to_string(state.bodies.size()) +
+                                    " rigid bodies, the simulation " + std::to_string(bodies_.size()));
     state_ = std::move(state);
+    poseBodies(0.0);
     for (std::size_t s = 0; s < state_.species.size(); ++s) populated_[s] = particlesOf(state_.species[s]).size() > 0;
     restDensityVersion_ = -1;
     partitioned_ = false;  // every rank holds the whole state (or its share) again: distribute() cuts it anew
@@ -542,7 +546,48 @@ SurfaceContact Simulation::surfaceContact(std::size_t field) {
     return s;
 }
 
+void Simulation::addBody(std::unique_ptr<Collider> c, const RigidBodyModel& model, std::shared_ptr<BodyFrame> frame,
+                         const RigidBodyState& initial) {
+    bodies_.push_back(Body{colliders_.size(), model, std::move(frame)});
+    colliders_.push_back(std::move(c));
+    state_.bodies.push_back(initial);
+    *bodies_.back().frame = model.frame(initial);
+}
+
+void Simulation::poseBodies(double dt) {
+    for (std::size_t k = 0; k < bodies_.size(); ++k)
+        *bodies_[k].frame = bodies_[k].model.frame(bodies_[k].model.moved(state_.bodies[k], dt));
+}
+
+float Simulation::moveBodies(double dt, const std::vector<BodyImpulse>& nodes, const std::vector<BodyImpulse>& particles) {
+    float fastest = 0.0f;
+    if (bodies_.empty()) return fastest;
+    std::vector<const Collider*> fixed;
+    for (const auto& c : colliders_)
+        if (!c->dynamic()) fixed.push_back(c.get());
+    for (std::size_t k = 0; k < bodies_.size(); ++k) {
+        const Body& b = bodies_[k];
+        BodyImpulse taken;
+        if (!nodes.empty()) taken += nodes[b.collider];
+        if (!particles.empty()) taken += particles[b.collider];
+        if (comm_->distributed())
+            for (ExactSum& e : taken.sum) comm_->sum(e);
+        RigidBodyState& s = state_.bodies[k];
+        const double before = b.model.energy(s, settings_.gravity);
+        RigidBodyState next = b.model.moved(s, dt);
+        b.model.accelerate(s, next, dt, settings_.gravity, taken.impulse(), taken.angular());
+        b.model.touch(next, fixed, state_.time + dt, dt);
+        s = next;
+        // The bodies belong to the checked system: what they lose, the material may gain.
+        state_.energy.work -= b.model.energy(s, settings_.gravity) - before;
+        *b.frame = b.model.frame(s);
+        fastest = std::max(fastest, float(b.model.fastestPoint(s)));
+    }
+    return fastest;
+}
+
 GridUpdateResult Simulation::updateGrid(float dt) {
+    poseBodies(double(dt));
     for (const auto& c : colliders_) c->prepare(state_.time + dt);
     const Vec3f g = settings_.gravity.cast<float>();
     const double tEnd = state_.time + dt;
@@ -601,6 +646,7 @@ GridUpdateResult Simulation::updateGrid(float dt) {
                 updateGridVelocities(fields_[f], colliders_, g, dt, tEnd, surfaceContact(f), false, owned(f));
             out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
             out.work += r.work;
+            addBodyImpulses(out.bodies, r.bodies);
         }
     }
     for (std::size_t f = 0; f < walls.size(); ++f) {
@@ -719,6 +765,7 @@ ProjectionSummary Simulation::holdOutOfColliders(float dt) {
         withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
             const ProjectionSummary r = projectOutOfColliders(grid, species, colliders_, state_.time + dt, dt, settings_.gravity);
             out.work += r.work;
+            addBodyImpulses(out.bodies, r.bodies);
             out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
             out.moved += r.moved;
         });
@@ -769,10 +816,12 @@ double Simulation::substep(double dtMax) {
         ExactSum work = gridUpdate.work;
         work += held.work;
         state_.energy.work += work.value();
+        // Bodies the material moves take what it gained from them (the step the transfers took, in float).
+        const float bodySpeed = moveBodies(double(float(dt)), gridUpdate.bodies, held.bodies);
         // The bounds the next step starts from, then the blow-up checks: a non-finite value, a particle that
         // outran its stencil, a CFL step that collapsed.
         const double cflBefore = cflTimeStep();
-        state_.bounds = StepBounds{std::max(g2p.maxSpeed, held.maxSpeed), g2p.minStiffnessKey};
+        state_.bounds = StepBounds{std::max({g2p.maxSpeed, held.maxSpeed, bodySpeed}), g2p.minStiffnessKey};
         guard_.checkSubstep(state_, g2p, dt, settings_.dx, cflBefore, cflTimeStep());
         emitStreams(state_.time, state_.time + dt);
         state_.time += dt;
@@ -897,6 +946,7 @@ FrameStats Simulation::measure() const {
         FrameStats st = sums.stats();
         st.frame = state_.frame;
         st.time = state_.time;
+        st.bodies = state_.bodies;
         st.activeLeaves = leaves;
         st.gridBytes = leaves * SparseGrid::bytesPerLeaf();
         return st;

@@ -129,6 +129,17 @@ public:
                       const std::vector<Vec3f>& perParticle = {}, const std::vector<float>& masses = {},
                       const std::vector<float>& volumes = {});
     void addCollider(std::unique_ptr<Collider> c) { colliders_.push_back(std::move(c)); }
+    /// A rigid body the material moves (core/RigidBody.h): `c` must move by Motion::dynamic(frame), which this
+    /// simulation poses before each substep's collider passes. It starts in `initial`.
+    void addBody(std::unique_ptr<Collider> c, const RigidBodyModel& model, std::shared_ptr<BodyFrame> frame,
+                 const RigidBodyState& initial);
+    /// The dynamic bodies, in collider order: which collider each is, and what it is.
+    struct Body {
+        std::size_t collider;
+        RigidBodyModel model;
+        std::shared_ptr<BodyFrame> frame;
+    };
+    const std::vector<Body>& bodies() const { return bodies_; }
     void addEmitter(Emitter e) {
         emitters_.push_back(std::move(e));
         state_.streamFlow.push_back(0.0);
@@ -267,6 +278,13 @@ private:
     void scatter(float dt);
     G2PSummary gather(float dt);
     ProjectionSummary holdOutOfColliders(float dt);
+    /// Poses every dynamic body where its velocities take it in a step dt, for the step's collider passes.
+    void poseBodies(double dt);
+    /// Moves the bodies through the step, then changes their velocities by gravity and what the material took from
+    /// them (the nodes' and the particles' impulses, summed over ranks). Their energy change is booked as the energy check's
+    /// external work, so material and bodies are checked as one system.
+    /// Returns the speed of the bodies' fastest point, which bounds the next step as the particles' speed does.
+    float moveBodies(double dt, const std::vector<BodyImpulse>& nodes, const std::vector<BodyImpulse>& particles);
     template <class S>
     void permute(S& species, const std::vector<uint32_t>& destination);
     /// addParticles' second half: appends the particles (already those this rank keeps) with the given ids.
@@ -283,6 +301,7 @@ private:
     // The model.
     SimulationSettings settings_;
     std::vector<std::unique_ptr<Collider>> colliders_;
+    std::vector<Body> bodies_;
     std::vector<Emitter> emitters_;
     // The state.
     SimState state_;

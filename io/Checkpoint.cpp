@@ -290,6 +290,12 @@ void encodeCheckpoint(std::ostream& os, const CheckpointInfo& info, const SimSta
                     sp.forEachArray([&](const auto& a) { out.array(a); });
                 },
                 s);
+        // The rigid bodies last, where there are any: a scene without them writes what earlier builds wrote.
+        if (!state.bodies.empty()) {
+            std::vector<double> bodies(state.bodies.size() * RigidBodyState::kDoubles);
+            for (std::size_t k = 0; k < state.bodies.size(); ++k) state.bodies[k].write(&bodies[k * RigidBodyState::kDoubles]);
+            out.array(bodies);
+        }
         const uint64_t sum = out.checksum();
         os.write(reinterpret_cast<const char*>(&sum), sizeof(sum));
         os.write(kTrailerMagic, sizeof(kTrailerMagic));
@@ -360,7 +366,14 @@ Checkpoint decodeCheckpoint(std::vector<char> bytes, const std::string& path) {
             sp);
         s.species.push_back(std::move(sp));
     }
-    if (!in.atEnd()) in.fail("unexpected bytes after the last species");
+    if (!in.atEnd()) {
+        std::vector<double> bodies;
+        in.array(bodies);
+        if (bodies.size() % RigidBodyState::kDoubles != 0) in.fail("the rigid bodies' array has a partial body");
+        s.bodies.resize(bodies.size() / RigidBodyState::kDoubles);
+        for (std::size_t k = 0; k < s.bodies.size(); ++k) s.bodies[k].read(&bodies[k * RigidBodyState::kDoubles]);
+    }
+    if (!in.atEnd()) in.fail("unexpected bytes after the rigid bodies");
     return c;
 }
 

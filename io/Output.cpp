@@ -54,6 +54,8 @@ FrameWriter FrameWriter::partWriter(const SceneDesc& scene, const SpeciesLayout&
 }
 
 void FrameWriter::configure(const SceneDesc& scene) {
+    bodies_ = std::size_t(
+        std::count_if(scene.colliders.begin(), scene.colliders.end(), [](const ColliderDesc& c) { return c.dynamic.enabled; }));
     for (const ParticleSetDesc& d : scene.sets) attributes_.setColours.push_back(d.colour);
     // The surface resolves the particle spacing of the first set; the sphere radius is a multiple of it.
     const double particlesPerCell = scene.sets.empty() ? 8.0 : scene.sets.front().particlesPerCell;
@@ -82,7 +84,7 @@ void FrameWriter::writeStats() {
     }
     std::map<int, std::string> rows = statsRows(csv_);
     for (const auto& [frame, row] : kept_) rows[frame] = row;
-    std::string text = FrameStats::csvHeader() + "\n";
+    std::string text = FrameStats::csvHeader(bodies_) + "\n";
     for (const auto& [frame, row] : rows) text += row + "\n";
     writeTextAtomically(dir_ + "/stats.csv", text);
 }
@@ -94,7 +96,7 @@ FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, co
     std::error_code ec;
     std::filesystem::create_directories(dir_, ec);
     if (ec) throw WriteError(dir_, "cannot create the output directory: " + ec.message());
-    csv_ = statsSoFar.empty() ? FrameStats::csvHeader() + "\n" : statsSoFar;
+    csv_ = statsSoFar.empty() ? FrameStats::csvHeader(bodies_) + "\n" : statsSoFar;
     writeStats();
     // The resolved scene, and where it came from: its asset paths are relative to that file (the render
     // tool finds the colliders' meshes through it). Not part of the scene's identity.

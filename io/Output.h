@@ -46,6 +46,7 @@ private:
     std::vector<SurfaceGroup> surfaces_;
     PointAttributes attributes_;    ///< Cd per set and the extra attributes asked for
     double particleSpacing_ = 0.0;  ///< what the surface resolves
+    std::size_t bodies_ = 0;        ///< dynamic colliders: their columns in stats.csv
     std::string dir_;
     std::string csv_;
     std::map<int, std::string> kept_;

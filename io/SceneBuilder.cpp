@@ -209,20 +209,58 @@ std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::st
     }
 }
 
+/// A collider the material moves: what the simulation integrates, and the frame its motion reads.
+struct BodySpec {
+    RigidBodyModel model;
+    RigidBodyState initial;
+    std::shared_ptr<BodyFrame> frame;
+};
+
+/// The rigid body a shape with closed-form mass properties makes (core/shapes/MassProperties.h).
+BodySpec bodyOf(const DynamicDesc& d, const MassProperties& props) {
+    BodySpec b;
+    b.model.mass = d.mass > 0.0 ? d.mass : d.density * props.volume;
+    b.model.inertia = props.inertia * (b.model.mass / props.volume);
+    b.model.restCentre = props.centre;
+    b.model.contactPoints = props.contactPoints;
+    b.model.contactRadius = props.contactRadius;
+    for (int a = 0; a < 3; ++a) {
+        const char axis = char('x' + a);
+        b.model.moveFree[a] = d.lockTranslation.find(axis) == std::string::npos ? 1.0 : 0.0;
+        b.model.turnFree[a] = d.lockRotation.find(axis) == std::string::npos ? 1.0 : 0.0;
+    }
+    b.initial = b.model.initial(d.velocity, d.angularVelocity);
+    b.frame = std::make_shared<BodyFrame>(b.model.frame(b.initial));
+    return b;
+}
+
 /// Collider `index`; `pivot`, if given, receives the pivot its motion turns about (the scene's, or its centre), and
-/// `warnings` what is worth a word about its field.
+/// `warnings` what is worth a word about its field; `body`, what a dynamic collider is as a rigid body.
 std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, Vec3d* pivot = nullptr,
-                                     std::vector<std::string>* warnings = nullptr, double* voxel = nullptr) {
+                                     std::vector<std::string>* warnings = nullptr, double* voxel = nullptr,
+                                     std::optional<BodySpec>* body = nullptr) {
     const ColliderDesc& c = scene.colliders[index];
     const auto motion = [&](const Vec3d& centre) {
         if (pivot) *pivot = c.motion.pivotGiven ? c.motion.pivot : centre;
         return motionOf(c.motion, centre, scene.settings.fps);
     };
     const std::string where = "/colliders/" + std::to_string(index);
-    if (const auto* v = std::get_if<VdbShape>(&c.shape); v && v->file.find("$F") != std::string::npos)
+    if (const auto* v = std::get_if<VdbShape>(&c.shape); v && v->file.find("$F") != std::string::npos && !c.dynamic.enabled)
         return motion(Vec3d::Zero()), sequenceCollider(scene, where, c, *v);
     return std::visit(
         [&]<class S>(const S& shape) -> std::unique_ptr<Collider> {
+            if (c.dynamic.enabled) {
+                if constexpr (requires { shape.massProperties(); }) {
+                    BodySpec spec = bodyOf(c.dynamic, shape.massProperties());
+                    if (pivot) *pivot = spec.model.restCentre;
+                    auto collider = analyticCollider(shape, c.boundary, c.friction, Motion::dynamic(spec.frame));
+                    if (body) *body = std::move(spec);
+                    return collider;
+                } else {
+                    throw SceneError(scene.file + ": " + where + "/dynamic: a " + S::kType +
+                                     " collider cannot be a rigid body yet; the shapes that can: sphere, box, cylinder");
+                }
+            }
             if constexpr (kFromFile<S>) {
                 FieldNotes notes;
                 const auto ls = levelSetOf(scene, where, shape, true, c.inside, &notes);
@@ -679,6 +717,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
     found.colliderPivot.resize(scene.colliders.size());
     // The colliders first: the sets' samples are checked against them.
     std::vector<std::unique_ptr<Collider>> colliders;
+    std::vector<std::optional<BodySpec>> bodySpecs(scene.colliders.size());
     found.colliderVoxel.assign(scene.colliders.size(), 0.0);
     for (std::size_t i = 0; i < scene.colliders.size(); ++i) {
         asked.checkStop();
@@ -688,7 +727,8 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
                     watch.note("building the distance field of collider " + std::to_string(i) + " (" + s.file + ")");
             },
             scene.colliders[i].shape);
-        colliders.push_back(colliderOf(scene, i, &found.colliderPivot[i], &found.warnings, &found.colliderVoxel[i]));
+        colliders.push_back(
+            colliderOf(scene, i, &found.colliderPivot[i], &found.warnings, &found.colliderVoxel[i], &bodySpecs[i]));
     }
     const SpeciesLayout layout = speciesLayout(scene);
     // Bodies, numbered in order of first appearance: a set's `body` name, or else its own name.
@@ -765,7 +805,11 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         e.pauseFrames = d.pauseFrames;
         sim->addEmitter(std::move(e));
     }
-    for (auto& c : colliders) sim->addCollider(std::move(c));
+    for (std::size_t i = 0; i < colliders.size(); ++i)
+        if (bodySpecs[i])
+            sim->addBody(std::move(colliders[i]), bodySpecs[i]->model, bodySpecs[i]->frame, bodySpecs[i]->initial);
+        else
+            sim->addCollider(std::move(colliders[i]));
     if (derived) *derived = std::move(found);
     return sim;
 }
@@ -808,6 +852,7 @@ std::string resolvedWithDerived(const SceneDesc& scene, const DerivedValues& der
             mesh && mesh->voxelSize <= 0.0 && i < derived.colliderVoxel.size() && derived.colliderVoxel[i] > 0.0)
             j["colliders"][i]["voxel_size"] = derived.colliderVoxel[i];
         const MotionDesc& m = scene.colliders[i].motion;
+        if (scene.colliders[i].dynamic.enabled) continue;  // moved by the material: no pivot to state
         nlohmann::ordered_json& motion = j["colliders"][i]["motion"];
         if (!m.pivotGiven) motion = withKey(motion, "pivot", array(derived.colliderPivot[i]), "keyframes");
         for (std::size_t k = 0; k < m.keyframes.size(); ++k)

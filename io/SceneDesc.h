@@ -57,12 +57,22 @@ struct MotionDesc {
     std::vector<KeyframeDesc> keyframes;
 };
 
+/// A collider the material moves (core/RigidBody.h).
+struct DynamicDesc {
+    bool enabled = false;  ///< the scene gave "dynamic"
+    double density = 1000.0;
+    double mass = 0.0;  ///< > 0: replaces density times the shape's volume
+    Vec3d velocity = Vec3d::Zero(), angularVelocity = Vec3d::Zero();
+    std::string lockTranslation = "none", lockRotation = "none";  ///< world axes held still: none, x, y, z, xy, ...
+};
+
 struct ColliderDesc {
     ColliderShape shape;
     Boundary boundary = Boundary::Separate;
     float friction = 0.0f;
     bool inside = false;  ///< material stays inside it (a tank, a glass, a drum)
     MotionDesc motion;
+    DynamicDesc dynamic;
 };
 
 struct OutputDesc {

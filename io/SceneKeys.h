@@ -317,6 +317,38 @@ void motionKeys(V& v, MotionDesc& m) {
             "give a constant motion (velocity, angular_velocity) or keyframes, not both");
 }
 
+/// Which world axes a rigid body's lock holds still.
+inline const std::vector<std::string>& kAxisLocks() {
+    static const std::vector<std::string> locks = {"none", "x", "y", "z", "xy", "xz", "yz", "xyz"};
+    return locks;
+}
+
+/// A collider the material moves: a rigid body (core/RigidBody.h).
+template <class V>
+void dynamicKeys(V& v, DynamicDesc& d) {
+    v.number(Key{.name = "density",
+                 .help = "the body's density; its mass, centre of mass and inertia follow from its shape",
+                 .lo = 1e-3,
+                 .hi = 1e6,
+                 .unit = "kg/m^3"},
+             d.density);
+    v.number(Key{.name = "mass",
+                 .help = "the body's mass, when above 0 (replaces density times the shape's volume; the inertia scales with it)",
+                 .lo = 0.0,
+                 .hi = 1e12,
+                 .unit = "kg"},
+             d.mass);
+    v.vec3(Key{.name = "velocity", .help = "initial velocity of its centre of mass", .unit = "m/s"}, d.velocity);
+    v.vec3(Key{.name = "angular_velocity",
+               .help = "initial angular velocity about its centre of mass, right-handed",
+               .unit = "rad/s"},
+           d.angularVelocity);
+    v.choice(Key{.name = "lock_translation", .help = "world axes along which it does not move", .noun = "axis lock"},
+             d.lockTranslation, kAxisLocks());
+    v.choice(Key{.name = "lock_rotation", .help = "world axes about which it does not turn", .noun = "axis lock"}, d.lockRotation,
+             kAxisLocks());
+}
+
 /// The keys every collider has besides its shape's.
 template <class V>
 void colliderKeys(V& v, ColliderDesc& c) {
@@ -334,6 +366,17 @@ void colliderKeys(V& v, ColliderDesc& c) {
         c.friction);
     v.flag(Key{.name = "inside", .help = "keep material inside it (a tank, a glass, a drum) instead of outside"}, c.inside);
     v.object(Key{.name = "motion", .help = "how it moves (none: static)"}, [&](auto& m) { motionKeys(m, c.motion); });
+    c.dynamic.enabled = v.given("dynamic");
+    v.object(Key{.name = "dynamic",
+                 .help = "makes it a rigid body the material moves, under gravity (sphere, box and cylinder; not with motion "
+                         "or inside)",
+                 .byDefault = "absent: it moves only as its motion says",
+                 .derived = true},
+             [&](auto& d) { dynamicKeys(d, c.dynamic); });
+    const MotionDesc& m = c.motion;
+    v.check(!c.dynamic.enabled || (m.velocity.isZero() && m.angularVelocity.isZero() && m.keyframes.empty() && !m.pivotGiven),
+            "dynamic", "a body the material moves takes no motion (its velocity is dynamic/velocity); give one or the other");
+    v.check(!c.dynamic.enabled || !c.inside, "dynamic", "a body the material moves keeps material outside it; leave out inside");
 }
 
 }  // namespace mpm

@@ -28,6 +28,9 @@ slow+='|^FrictionWall\.'
 # The viscous liquid's flows between walls (133 and 183 s under ASan here, clean when run; 5 and 9 s in Release); its
 # material-point tests run here.
 slow+='|^ViscousFlow\.(PlanePoiseuille|ABingham)'
+# A floating body's two 2 s runs in water (17 s in Release); the body's exchange, contact and checkpoint run here in the
+# other rigid-body tests.
+slow+='|^RigidBody\.FloatsNear'
 ctest --test-dir "$build" -L unit -E "$slow" --output-on-failure -j2
 # The rank layer under the sanitizers: a scene with water, jelly, emitters and friction colliders on 1 and 3
 # ranks (mpirun on loopback), and one of bodies with fields of their own on mirrored walls on 1 and 2, must run

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/shapes/MassProperties.h"
 #include "core/shapes/Rotation.h"
 #include "materials/Parameters.h"
 
@@ -82,6 +83,13 @@ struct Box {
         return (p.array() >= min.array()).all() && (p.array() < max.array()).all();
     }
     double volume() const { return (max - min).prod(); }
+    /// As a rigid body: with edges a, b, c, I = V/12 diag(b^2 + c^2, a^2 + c^2, a^2 + b^2) in the box's axes.
+    MassProperties massProperties() const {
+        const Vec3d e2 = (max - min).cwiseAbs2();
+        const Vec3d d(e2[1] + e2[2], e2[0] + e2[2], e2[0] + e2[1]);
+        const Mat3d own = volume() / 12.0 * d.asDiagonal().toDenseMatrix();
+        return {volume(), middle(), R * own * R.transpose(), boxSurfacePoints(middle(), 0.5 * (max - min), R), 0.0};
+    }
     void bounds(Vec3d& lo, Vec3d& hi) const {
         if (!rotated) {
             lo = min;

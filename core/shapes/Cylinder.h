@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/shapes/MassProperties.h"
 #include "materials/Parameters.h"
 
 namespace mpm {
@@ -58,6 +59,23 @@ struct Cylinder {
         return r < radius && std::fabs(y) < 0.5 * height;
     }
     double volume() const { return M_PI * radius * radius * height; }
+    /// As a rigid body: V r^2 / 2 about the axis, V (3 r^2 + h^2) / 12 about any line across it through the centre.
+    MassProperties massProperties() const {
+        const double along = 0.5 * volume() * radius * radius,
+                     across = volume() * (3.0 * radius * radius + height * height) / 12.0;
+        const Mat3d aa = axis * axis.transpose();
+        // Contact points: both rims and caps' centres, and lines along the side.
+        constexpr int kAround = 16;
+        std::vector<Vec3d> points;
+        const Vec3d u = axis.unitOrthogonal(), w = axis.cross(u);
+        for (int k = 0; k < kAround; ++k) {
+            const double a = 2.0 * M_PI * k / kAround;
+            const Vec3d radial = radius * (std::cos(a) * u + std::sin(a) * w);
+            for (double s : {-0.5, -0.25, 0.0, 0.25, 0.5}) points.push_back(centre + s * height * axis + radial);
+        }
+        for (double s : {-0.5, 0.5}) points.push_back(centre + s * height * axis);
+        return {volume(), centre, across * (Mat3d::Identity() - aa) + along * aa, points, 0.0};
+    }
     void bounds(Vec3d& lo, Vec3d& hi) const {
         Vec3d e;
         for (int i = 0; i < 3; ++i)

@@ -2,6 +2,7 @@
 // Solid ball: phi(x) = |x - c| - r (thesis section 5). Fills a particle set or collides.
 #include <cmath>
 
+#include "core/shapes/MassProperties.h"
 #include "materials/Parameters.h"
 
 namespace mpm {
@@ -26,6 +27,10 @@ struct Sphere {
     }
     bool contains(const Vec3d& x) const { return (x - centre).squaredNorm() < radius * radius; }
     double volume() const { return 4.0 / 3.0 * M_PI * radius * radius * radius; }
+    /// As a rigid body: I = 2/5 V r^2 on every axis.
+    MassProperties massProperties() const {
+        return {volume(), centre, 0.4 * volume() * radius * radius * Mat3d::Identity(), {centre}, radius};
+    }
     Vec3d middle() const { return centre; }
     void bounds(Vec3d& lo, Vec3d& hi) const {
         lo = centre - Vec3d::Constant(radius);

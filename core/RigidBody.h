@@ -1,0 +1,94 @@
+#pragma once
+// Rigid bodies the material moves (two-way coupling): a collider with mass and inertia whose pose is integrated
+// from gravity and the impulses it exchanges with the material each substep. The exchange is the collider passes'
+// own: what the boundary condition and friction change in the nodes' momentum (m dv), and what the particle pass
+// changes in the particles', is what the body loses, so material and bodies together keep their momentum and
+// angular momentum to round-off. Partitioned coupling, symplectic Euler for the body (position first):
+//   move     x' = x + dt v,  q' = exp(dt w / 2) q;
+//   the collider passes run with the body at (x', q') moving at (v, w), the motion that takes it there, so that the
+//   velocity the wall gives the nodes is the wall's true displacement over the step; they sum the material's
+//   impulse J and its angular impulse L about x';
+//   then     v' = v + dt g - J / M,  w' = I'^-1 (I w - L),  with I = R I_rest R^T at q and I' at q'
+//   (the angular momentum a free body keeps, so Euler's gyroscopic term is exact).
+// Giving the nodes any other velocity than the wall's displacement (v + dt g, say) pushes the material under a
+// resting body by g dt^2 a step, which the particle pass then squeezes: a floating box sank at g dt steadily.
+// Locked axes (world axes) keep their velocity component at zero. Against the fixed colliders (those the scene moves,
+// or not at all) a body touches at sample points of its surface: inelastic contact with Coulomb friction by
+// sequential impulses (projected Gauss-Seidel over the contacts, a fixed number of sweeps in a fixed order, with
+// speculative contacts for points a step could carry in: Catto 2006, "Fast and Simple Physics using Sequential
+// Impulses"), then the body is moved out along the contacts' normals. Bodies do not touch each other yet.
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "core/ExactSum.h"
+#include "core/Motion.h"
+#include "core/Types.h"
+
+namespace mpm {
+
+class Collider;
+
+/// Where a body is and how it moves: what a checkpoint stores of it.
+struct RigidBodyState {
+    Vec3d centre = Vec3d::Zero();                                     ///< of mass [m]
+    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< from the scene's placement
+    Vec3d velocity = Vec3d::Zero();                                   ///< of the centre [m/s]
+    Vec3d spin = Vec3d::Zero();                                       ///< angular velocity [rad/s], world axes
+
+    static constexpr int kDoubles = 13;
+    void write(double* out) const;
+    void read(const double* in);
+};
+
+/// What does not change: mass, inertia, where the centre of mass sits in the scene's placement, and the locks.
+struct RigidBodyModel {
+    double mass = 0.0;                  ///< [kg]
+    Mat3d inertia = Mat3d::Identity();  ///< about the centre of mass, in the scene's placement [kg m^2]
+    Vec3d restCentre = Vec3d::Zero();   ///< centre of mass in the scene's placement [m]
+    Vec3d moveFree = Vec3d::Ones();     ///< per world axis, 1 free or 0 locked
+    Vec3d turnFree = Vec3d::Ones();
+    std::vector<Vec3d> contactPoints;  ///< surface samples in the scene's placement (core/shapes/MassProperties.h)
+    double contactRadius = 0.0;        ///< the surface lies this far beyond each sample (a sphere's radius)
+
+    /// The body at rest where the scene places it.
+    RigidBodyState initial(const Vec3d& velocity, const Vec3d& spin) const;
+    /// Where the step's start velocities take it by the step's end (the velocities stay).
+    RigidBodyState moved(const RigidBodyState& s, double dt) const;
+    /// The velocities at the step's end of a body that started the step in `start` and has moved to `s`: gravity,
+    /// and what the material took, J and, about the body's centre, L (the body loses both).
+    void accelerate(const RigidBodyState& start, RigidBodyState& s, double dt, const Vec3d& gravity, const Vec3d& J,
+                    const Vec3d& L) const;
+    /// Contact with the fixed colliders at time t, at the state's pose, before a next step of about dt: the
+    /// velocities change by the impulses of inelastic Coulomb contact (a point in a collider stops approaching it,
+    /// one outside may close its gap in dt, no more), and the body moves out of them. Returns the contacts.
+    int touch(RigidBodyState& s, const std::vector<const Collider*>& fixed, double t, double dt) const;
+    /// Kinetic plus gravitational energy (zero height at the origin, as the particles').
+    double energy(const RigidBodyState& s, const Vec3d& gravity) const;
+    /// The pose and velocity the collider passes read.
+    BodyFrame frame(const RigidBodyState& s) const;
+    /// The fastest a point of the body moves: |v| + |w| times a bound on its reach from the centre of mass
+    /// (sqrt(1.5 tr I / m): the half diagonal of a box, above a sphere's or a cylinder's reach).
+    double fastestPoint(const RigidBodyState& s) const {
+        return s.velocity.norm() + s.spin.norm() * std::sqrt(1.5 * inertia.trace() / mass);
+    }
+    /// The world inertia tensor at an orientation.
+    Mat3d worldInertia(const Eigen::Quaterniond& q) const;
+};
+
+/// The impulse and angular impulse a body's collider passes gave the material, summed exactly (core/ExactSum.h),
+/// so that the body moves the same on any number of threads and ranks.
+struct BodyImpulse {
+    std::array<ExactSum, 6> sum;
+    void add(const Vec3d& impulse, const Vec3d& angular) {
+        for (int a = 0; a < 3; ++a) sum[std::size_t(a)] += impulse[a], sum[std::size_t(a + 3)] += angular[a];
+    }
+    BodyImpulse& operator+=(const BodyImpulse& o) {
+        for (std::size_t k = 0; k < sum.size(); ++k) sum[k] += o.sum[k];
+        return *this;
+    }
+    Vec3d impulse() const { return {sum[0].value(), sum[1].value(), sum[2].value()}; }
+    Vec3d angular() const { return {sum[3].value(), sum[4].value(), sum[5].value()}; }
+};
+
+}  // namespace mpm
