@@ -40,7 +40,8 @@ struct FrameStats {
     double totalEnergy() const { return kineticEnergy + elasticEnergy + gravityEnergy; }
 
     /// The columns; a scene with rigid bodies adds, per body k, its centre of mass body<k>_x, _y, _z, orientation
-    /// quaternion _qw, _qx, _qy, _qz, velocity _vx, _vy, _vz and angular velocity _wx, _wy, _wz.
+    /// quaternion _qw, _qx, _qy, _qz (its turn from the scene's placement), velocity _vx, _vy, _vz and angular velocity
+    /// _wx, _wy, _wz.
     static std::string csvHeader(std::size_t bodies = 0);
     std::string csvRow() const;
 };

@@ -62,13 +62,14 @@ int RigidBodyModel::touch(RigidBodyState& s, const std::vector<const Collider*>&
     // points at once; touching only once inside, a box on a floor rocked from corner to corner.
     const double reach = std::sqrt(1.5 * inertia.trace() / mass);
     const double margin = 2.0 * dt * (s.velocity.norm() + s.spin.norm() * reach);
-    for (const Vec3d& rest : contactPoints) {
-        const Vec3d p = s.centre + R * (rest - restCentre);
+    for (std::size_t i = 0; i < contactPoints.size(); ++i) {
+        const Vec3d p = s.centre + R * (contactPoints[i] - restCentre);
+        const double radius = contactRadii[i];
         for (const Collider* c : fixed) {
-            const double phi = c->signedDistance(p, t) - contactRadius;
+            const double phi = c->signedDistance(p, t) - radius;
             if (!(phi < margin)) continue;
             const Vec3d n = c->normal(p, t);
-            const Vec3d q = p - contactRadius * n;
+            const Vec3d q = p - radius * n;
             const double mu = c->boundary() == Boundary::Sticky ? std::numeric_limits<double>::infinity() : double(c->friction());
             contacts.push_back(Contact{q - s.centre, n, c->velocity(q, t), -phi, mu});
         }
@@ -122,9 +123,9 @@ int RigidBodyModel::touch(RigidBodyState& s, const std::vector<const Collider*>&
     return int(contacts.size());
 }
 
-double RigidBodyModel::energy(const RigidBodyState& s, const Vec3d& gravity) const {
+double RigidBodyModel::energy(const RigidBodyState& s, const Vec3d& gravity, double dt) const {
     return 0.5 * mass * s.velocity.squaredNorm() + 0.5 * s.spin.dot(worldInertia(s.orientation) * s.spin) -
-           mass * gravity.dot(s.centre);
+           mass * gravity.dot(s.centre) - 0.5 * dt * mass * gravity.dot(s.velocity);
 }
 
 BodyFrame RigidBodyModel::frame(const RigidBodyState& s) const {

@@ -10,8 +10,10 @@
 //   impulse J and its angular impulse L about x';
 //   then     v' = v + dt g - J / M,  w' = I'^-1 (I w - L),  with I = R I_rest R^T at q and I' at q'
 //   (the angular momentum a free body keeps, so Euler's gyroscopic term is exact).
-// Giving the nodes any other velocity than the wall's displacement (v + dt g, say) pushes the material under a
-// resting body by g dt^2 a step, which the particle pass then squeezes: a floating box sank at g dt steadily.
+// Giving the nodes any other velocity than the wall's displacement pushes the material under a resting body a little
+// every step, which the particle pass then squeezes. The scheme keeps E - dt M g . v / 2 in free flight (its
+// modified energy) where E = 1/2 M v^2 + 1/2 w . I w - M g . x gains M g^2 dt^2 / 2 a step: booked with E alone, a
+// body falling in air tripped the energy check where the material was light.
 // Locked axes (world axes) keep their velocity component at zero. Against the fixed colliders (those the scene moves,
 // or not at all) a body touches at sample points of its surface: inelastic contact with Coulomb friction by
 // sequential impulses (projected Gauss-Seidel over the contacts, a fixed number of sweeps in a fixed order, with
@@ -49,7 +51,7 @@ struct RigidBodyModel {
     Vec3d moveFree = Vec3d::Ones();     ///< per world axis, 1 free or 0 locked
     Vec3d turnFree = Vec3d::Ones();
     std::vector<Vec3d> contactPoints;  ///< surface samples in the scene's placement (core/shapes/MassProperties.h)
-    double contactRadius = 0.0;        ///< the surface lies this far beyond each sample (a sphere's radius)
+    std::vector<double> contactRadii;  ///< per sample: the surface lies this far beyond it (a sphere's radius)
 
     /// The body at rest where the scene places it.
     RigidBodyState initial(const Vec3d& velocity, const Vec3d& spin) const;
@@ -63,8 +65,9 @@ struct RigidBodyModel {
     /// velocities change by the impulses of inelastic Coulomb contact (a point in a collider stops approaching it,
     /// one outside may close its gap in dt, no more), and the body moves out of them. Returns the contacts.
     int touch(RigidBodyState& s, const std::vector<const Collider*>& fixed, double t, double dt) const;
-    /// Kinetic plus gravitational energy (zero height at the origin, as the particles').
-    double energy(const RigidBodyState& s, const Vec3d& gravity) const;
+    /// Kinetic plus gravitational energy (zero height at the origin, as the particles'), less dt M g . v / 2: the
+    /// energy the scheme keeps in free flight over steps of dt.
+    double energy(const RigidBodyState& s, const Vec3d& gravity, double dt) const;
     /// The pose and velocity the collider passes read.
     BodyFrame frame(const RigidBodyState& s) const;
     /// The fastest a point of the body moves: |v| + |w| times a bound on its reach from the centre of mass

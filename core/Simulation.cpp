@@ -573,13 +573,13 @@ float Simulation::moveBodies(double dt, const std::vector<BodyImpulse>& nodes, c
         if (comm_->distributed())
             for (ExactSum& e : taken.sum) comm_->sum(e);
         RigidBodyState& s = state_.bodies[k];
-        const double before = b.model.energy(s, settings_.gravity);
+        const double before = b.model.energy(s, settings_.gravity, dt);
         RigidBodyState next = b.model.moved(s, dt);
         b.model.accelerate(s, next, dt, settings_.gravity, taken.impulse(), taken.angular());
         b.model.touch(next, fixed, state_.time + dt, dt);
         s = next;
         // The bodies belong to the checked system: what they lose, the material may gain.
-        state_.energy.work -= b.model.energy(s, settings_.gravity) - before;
+        state_.energy.work -= b.model.energy(s, settings_.gravity, dt) - before;
         *b.frame = b.model.frame(s);
         fastest = std::max(fastest, float(b.model.fastestPoint(s)));
     }

@@ -223,7 +223,7 @@ BodySpec bodyOf(const DynamicDesc& d, const MassProperties& props) {
     b.model.inertia = props.inertia * (b.model.mass / props.volume);
     b.model.restCentre = props.centre;
     b.model.contactPoints = props.contactPoints;
-    b.model.contactRadius = props.contactRadius;
+    b.model.contactRadii = props.contactRadii;
     for (int a = 0; a < 3; ++a) {
         const char axis = char('x' + a);
         b.model.moveFree[a] = d.lockTranslation.find(axis) == std::string::npos ? 1.0 : 0.0;

@@ -88,7 +88,9 @@ struct Box {
         const Vec3d e2 = (max - min).cwiseAbs2();
         const Vec3d d(e2[1] + e2[2], e2[0] + e2[2], e2[0] + e2[1]);
         const Mat3d own = volume() / 12.0 * d.asDiagonal().toDenseMatrix();
-        return {volume(), middle(), R * own * R.transpose(), boxSurfacePoints(middle(), 0.5 * (max - min), R), 0.0};
+        std::vector<Vec3d> points = boxSurfacePoints(middle(), 0.5 * (max - min), R);
+        const std::size_t n = points.size();
+        return {volume(), middle(), R * own * R.transpose(), std::move(points), std::vector<double>(n, 0.0)};
     }
     void bounds(Vec3d& lo, Vec3d& hi) const {
         if (!rotated) {

@@ -64,17 +64,26 @@ struct Cylinder {
         const double along = 0.5 * volume() * radius * radius,
                      across = volume() * (3.0 * radius * radius + height * height) / 12.0;
         const Mat3d aa = axis * axis.transpose();
-        // Contact points: both rims and caps' centres, and lines along the side.
-        constexpr int kAround = 16;
+        // Contact points: balls of its radius along the axis, which roll on a wall exactly (where the height allows
+        // them inside), and both rims and the caps' centres, for the caps and edges.
+        constexpr int kAround = 64;  // a rim rests on a wall as a 64-gon: within r (1 - cos(pi / 64)) = 1.2e-3 r
+        constexpr int kAlong = 5;
         std::vector<Vec3d> points;
+        std::vector<double> radii;
+        if (height >= 2.0 * radius)
+            for (int k = 0; k < kAlong; ++k) {
+                points.push_back(centre + (-0.5 + double(k) / (kAlong - 1)) * (height - 2.0 * radius) * axis);
+                radii.push_back(radius);
+            }
         const Vec3d u = axis.unitOrthogonal(), w = axis.cross(u);
         for (int k = 0; k < kAround; ++k) {
             const double a = 2.0 * M_PI * k / kAround;
-            const Vec3d radial = radius * (std::cos(a) * u + std::sin(a) * w);
-            for (double s : {-0.5, -0.25, 0.0, 0.25, 0.5}) points.push_back(centre + s * height * axis + radial);
+            for (double s : {-0.5, 0.5})
+                points.push_back(centre + s * height * axis + radius * (std::cos(a) * u + std::sin(a) * w));
         }
         for (double s : {-0.5, 0.5}) points.push_back(centre + s * height * axis);
-        return {volume(), centre, across * (Mat3d::Identity() - aa) + along * aa, points, 0.0};
+        radii.resize(points.size(), 0.0);
+        return {volume(), centre, across * (Mat3d::Identity() - aa) + along * aa, std::move(points), std::move(radii)};
     }
     void bounds(Vec3d& lo, Vec3d& hi) const {
         Vec3d e;

@@ -2,7 +2,7 @@
 // What a solid's shape says about it as a rigid body (core/RigidBody.h): its volume, its centroid and its inertia
 // tensor about the centroid per unit density, in world axes as the scene places it. A shape that can be a body's
 // gives these in closed form (massProperties()), and the points of its surface that test its contact with fixed
-// colliders (a sphere: its centre, with its radius).
+// colliders, each with the radius of the ball around it that the surface holds (a sphere: its centre and radius).
 #include <vector>
 
 #include "core/Types.h"
@@ -13,8 +13,8 @@ struct MassProperties {
     double volume = 0.0;               ///< [m^3]
     Vec3d centre = Vec3d::Zero();      ///< centroid [m]
     Mat3d inertia = Mat3d::Zero();     ///< about the centroid, per unit density [m^5]
-    std::vector<Vec3d> contactPoints;  ///< on the surface as placed (or within contactRadius of it) [m]
-    double contactRadius = 0.0;        ///< how far the surface lies beyond each contact point [m]
+    std::vector<Vec3d> contactPoints;  ///< on the surface as placed, or inside it by their radius [m]
+    std::vector<double> contactRadii;  ///< per point: the surface lies this far beyond it (a sphere's radius) [m]
 };
 
 /// Points on a box's surface as placed: corners, and a grid of kPerEdge points along each edge and on each face.

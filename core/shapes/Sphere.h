@@ -29,7 +29,7 @@ struct Sphere {
     double volume() const { return 4.0 / 3.0 * M_PI * radius * radius * radius; }
     /// As a rigid body: I = 2/5 V r^2 on every axis.
     MassProperties massProperties() const {
-        return {volume(), centre, 0.4 * volume() * radius * radius * Mat3d::Identity(), {centre}, radius};
+        return {volume(), centre, 0.4 * volume() * radius * radius * Mat3d::Identity(), {centre}, {radius}};
     }
     Vec3d middle() const { return centre; }
     void bounds(Vec3d& lo, Vec3d& hi) const {
