@@ -27,7 +27,7 @@ ParticleSums sumParticles(const std::vector<AnySpecies>& species, double dx, flo
     ParticleSums total;
     const double D = inertiaScale * dx * dx;
     for (const AnySpecies& s : species) {
-        total.add(std::visit(
+        const ParticleSums part = std::visit(
             [&](const auto& sp) {
                 using M = typename std::decay_t<decltype(sp)>::Material;
                 const ParticleArrays& P = sp.p;
@@ -60,7 +60,12 @@ ParticleSums sumParticles(const std::vector<AnySpecies>& species, double dx, flo
                         return a;
                     });
             },
-            s));
+            s);
+        total.add(part);
+        ExactSum energy = part.sum[kKinetic];
+        energy += part.sum[kElastic];
+        energy += part.sum[kGravity];
+        total.speciesEnergy.push_back(energy);
     }
     return total;
 }
@@ -74,6 +79,7 @@ FrameStats ParticleSums::stats() const {
     st.elasticEnergy = sum[kElastic].value();
     st.gravityEnergy = sum[kGravity].value();
     st.maxSpeed = maxSpeed;
+    for (const ExactSum& e : speciesEnergy) st.speciesEnergy.push_back(e.value());
     if (particles) {
         st.minJ = minJ;
         st.maxJ = maxJ;

@@ -35,6 +35,9 @@ struct FrameStats {
     double wallSeconds = 0.0;
     /// The dynamic colliders at the frame's end, in collider order: columns body<k>_* after the others.
     std::vector<RigidBodyState> bodies;
+    /// Each species' (set's) kinetic + stored + gravitational energy, in species order: the energy check names
+    /// the one that gained most (not written to stats.csv).
+    std::vector<double> speciesEnergy;
 
     /// Kinetic + stored + gravitational: without external work and dissipation it is constant.
     double totalEnergy() const { return kineticEnergy + elasticEnergy + gravityEnergy; }
@@ -54,6 +57,8 @@ struct ParticleSums {
     double maxSpeed = 0.0;
     double minJ = std::numeric_limits<double>::infinity(), maxJ = -std::numeric_limits<double>::infinity();
     std::size_t particles = 0;
+    /// Per species, in order: kinetic + stored + gravitational energy (sumParticles fills it; add leaves it).
+    std::vector<ExactSum> speciesEnergy;
     void add(const ParticleSums& o);
     /// Mass, momenta, energies and extremes (frame, time and grid fields left for the caller).
     FrameStats stats() const;

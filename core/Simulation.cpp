@@ -575,8 +575,13 @@ float Simulation::moveBodies(double dt, const std::vector<BodyImpulse>& nodes, c
         RigidBodyState& s = state_.bodies[k];
         const double before = b.model.energy(s, settings_.gravity, dt);
         RigidBodyState next = b.model.moved(s, dt);
-        b.model.accelerate(s, next, dt, settings_.gravity, taken.impulse(), taken.angular());
-        b.model.touch(next, fixed, state_.time + dt, dt);
+        if (bodyDriver_) {
+            bodyDriver_(k, dt, -taken.impulse(), -taken.angular(), next);
+            next.orientation.normalize();
+        } else {
+            b.model.accelerate(s, next, dt, settings_.gravity, taken.impulse(), taken.angular());
+            b.model.touch(next, fixed, state_.time + dt, dt);
+        }
         s = next;
         // The bodies belong to the checked system: what they lose, the material may gain.
         state_.energy.work -= b.model.energy(s, settings_.gravity, dt) - before;
@@ -931,6 +936,7 @@ FrameStats Simulation::measure() const {
         for (const SparseGrid& field : fields_) leaves += field.leafCount();
         if (comm_->distributed()) {
             for (ExactSum& e : sums.sum) comm_->sum(e);
+            for (ExactSum& e : sums.speciesEnergy) comm_->sum(e);
             sums.maxSpeed = comm_->max(sums.maxSpeed);
             sums.minJ = comm_->min(sums.minJ);
             sums.maxJ = comm_->max(sums.maxJ);

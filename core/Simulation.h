@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -140,6 +141,15 @@ public:
         std::shared_ptr<BodyFrame> frame;
     };
     const std::vector<Body>& bodies() const { return bodies_; }
+    /// An outside rigid-body solver in place of the built-in one (gravity, the material's impulses, contact with the
+    /// fixed colliders): after each substep it gets, for each body, the substep, the impulse and the angular impulse
+    /// (about the centre of mass, world axes) the material gave the body in it, and the body's state, already moved
+    /// to the pose that substep used with its velocities as before; it sets the velocities (and may set the pose)
+    /// the next substep starts from, which moves the body by them first. The body's energy change is booked as
+    /// work, as the built-in solver's is.
+    using BodyDriver = std::function<void(std::size_t body, double dt, const Vec3d& impulse, const Vec3d& angularImpulse,
+                                          RigidBodyState& state)>;
+    void setBodyDriver(BodyDriver driver) { bodyDriver_ = std::move(driver); }
     void addEmitter(Emitter e) {
         emitters_.push_back(std::move(e));
         state_.streamFlow.push_back(0.0);
@@ -321,6 +331,7 @@ private:
     StabilityGuard guard_;
     PhaseSeconds phases_;
     const std::atomic<int>* stop_ = nullptr;
+    BodyDriver bodyDriver_;
     // Ranks.
     const Comm* comm_;
     std::vector<Vec3i> splitters_;  ///< leaf coordinate where rank r + 1's range starts (Morton order)

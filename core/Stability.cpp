@@ -1,5 +1,6 @@
 #include "core/Stability.h"
 
+#include <limits>
 #include <optional>
 #include <sstream>
 
@@ -40,10 +41,12 @@ std::optional<Culprit> firstOverRanks(const Comm& comm, const std::optional<Culp
     return best;
 }
 
-Culprit fastestParticle(const SimState& state, const Comm& comm) {
+/// The fastest particle of every species, or of species `only`.
+Culprit fastestParticle(const SimState& state, const Comm& comm, int only = -1) {
     std::optional<Culprit> best;
     float vmax = -1.0f;
     for (std::size_t s = 0; s < state.species.size(); ++s) {
+        if (only >= 0 && int(s) != only) continue;
         const ParticleArrays& P = particlesOf(state.species[s]);
         for (std::size_t i = 0; i < P.size(); ++i)
             if (P.v[i].squaredNorm() > vmax) {
@@ -127,6 +130,7 @@ void StabilityGuard::resetEnergyReference(EnergyReference& ref, const FrameStats
     ref.set = true;
     ref.min = st.totalEnergy() - ref.work;
     ref.scale = std::max(ref.scale, st.kineticEnergy + st.elasticEnergy);
+    speciesEnergyAtMin_ = st.speciesEnergy;
 }
 
 void StabilityGuard::checkEnergy(SimState& state, const FrameStats& st) const {
@@ -139,12 +143,25 @@ void StabilityGuard::checkEnergy(SimState& state, const FrameStats& st) const {
     const double own = st.totalEnergy() - ref.work;
     const double rise = own - ref.min;
     if (limit > 0.0 && st.particles > 0 && rise > limit * scale) {
-        const Culprit p = fastestParticle(state, *comm_);
         std::ostringstream cause;
         cause << "total energy rose by " << rise << " J without external work (" << 100.0 * rise / scale
-              << "% of the largest kinetic + stored energy; the limit is " << 100.0 * limit << "%); fastest";
+              << "% of the largest kinetic + stored energy; the limit is " << 100.0 * limit << "%); ";
+        // The set that gained most since the minimum is the one blowing up (the fastest particle may be one it flung).
+        int gainer = -1;
+        if (speciesEnergyAtMin_.size() == st.speciesEnergy.size() && st.speciesEnergy.size() > 1) {
+            double most = -std::numeric_limits<double>::infinity();
+            for (std::size_t s = 0; s < st.speciesEnergy.size(); ++s)
+                if (st.speciesEnergy[s] - speciesEnergyAtMin_[s] > most)
+                    most = st.speciesEnergy[s] - speciesEnergyAtMin_[s], gainer = int(s);
+            cause << "set " << std::visit([](const auto& sp) { return sp.name; }, state.species[std::size_t(gainer)])
+                  << " gained most (" << most << " J); its fastest";
+        } else {
+            cause << "fastest";
+        }
+        const Culprit p = fastestParticle(state, *comm_, gainer);
         failAt(state, cause.str(), p.species, p.id, 0.0);
     }
+    if (own <= ref.min) speciesEnergyAtMin_ = st.speciesEnergy;
     ref.min = std::min(ref.min, own);
 }
 

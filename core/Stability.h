@@ -108,6 +108,9 @@ private:
     double gravity_, dx_;
     const Comm* comm_ = &Comm::single();
     double stepScale_ = 1.0;
+    /// Each species' energy when the reference's minimum was last taken, so that a blow-up names the set that
+    /// gained most (only for the message: a resumed run starts without it and names the fastest particle).
+    mutable std::vector<double> speciesEnergyAtMin_;
 };
 
 /// Throws SimulationError: "<cause> in frame F (substep S of the run, t = T s[, dt = DT s]): particle id I of set NAME".

@@ -377,18 +377,24 @@ Checkpoint decodeCheckpoint(std::vector<char> bytes, const std::string& path) {
     return c;
 }
 
-std::string checkpointPath(const std::string& dir, const std::string& scene, int frame) {
+namespace {
+constexpr const char* kInside = "_inside";
+}
+
+std::string checkpointPath(const std::string& dir, const std::string& scene, int frame, bool inside) {
     char buf[32];
-    std::snprintf(buf, sizeof(buf), "%04d", frame);
+    std::snprintf(buf, sizeof(buf), "%04d%s", inside ? frame + 1 : frame, inside ? kInside : "");
     return dir + "/" + scene + "_checkpoint_" + buf + ".mpmc";
 }
 
-std::string checkpointPartPath(const std::string& dir, const std::string& scene, int frame, int part) {
-    char buf[48];
+std::string checkpointPartPath(const std::string& dir, const std::string& scene, int frame, int part, bool inside) {
+    char buf[64];
+    const int number = inside ? frame + 1 : frame;
+    const char* suffix = inside ? kInside : "";
     if (part < 0)
-        std::snprintf(buf, sizeof(buf), "%04d_rank*", frame);
+        std::snprintf(buf, sizeof(buf), "%04d%s_rank*", number, suffix);
     else
-        std::snprintf(buf, sizeof(buf), "%04d_rank%03d", frame, part);
+        std::snprintf(buf, sizeof(buf), "%04d%s_rank%03d", number, suffix, part);
     return dir + "/" + scene + "_checkpoint_" + buf + ".mpmc";
 }
 
@@ -400,9 +406,10 @@ std::vector<std::string> CheckpointFiles::all() const {
 }
 
 std::vector<CheckpointFiles> listCheckpoints(const std::string& dir, const std::string& scene) {
-    // Exactly this scene's: "<scene>_checkpoint_NNNN.mpmc" and its parts "..._NNNN_rankRRR.mpmc".
-    static const std::regex kName(R"(^([0-9]{4,})(_rank([0-9]{3,}))?\.mpmc$)");
-    std::map<int, CheckpointFiles, std::greater<int>> byFrame;
+    // Exactly this scene's: "<scene>_checkpoint_NNNN[_inside].mpmc" and its parts "..._NNNN[_inside]_rankRRR.mpmc".
+    static const std::regex kName(R"(^([0-9]{4,})(_inside)?(_rank([0-9]{3,}))?\.mpmc$)");
+    // Ordered by 2 x (frames done) + inside: after frame F (2F), inside frame F + 1 (2F + 1), after F + 1 (2F + 2).
+    std::map<long long, CheckpointFiles, std::greater<long long>> byFrame;
     std::error_code ec;
     const std::string prefix = scene + "_checkpoint_";
     for (const auto& e : fs::directory_iterator(dir, ec)) {
@@ -410,11 +417,15 @@ std::vector<CheckpointFiles> listCheckpoints(const std::string& dir, const std::
         std::smatch m;
         if (name.compare(0, prefix.size(), prefix) != 0) continue;
         const std::string rest = name.substr(prefix.size());
-        if (!std::regex_match(rest, m, kName) || m[1].length() > 9 || m[3].length() > 9) continue;
-        CheckpointFiles& f = byFrame[std::stoi(m[1].str())];
-        f.frame = std::stoi(m[1].str());
-        if (m[2].matched)
-            f.parts.emplace_back(std::stoi(m[3].str()), e.path().string());
+        if (!std::regex_match(rest, m, kName) || m[1].length() > 9 || m[4].length() > 9) continue;
+        const bool inside = m[2].matched;
+        const int frame = std::stoi(m[1].str()) - (inside ? 1 : 0);
+        if (frame < 0) continue;
+        CheckpointFiles& f = byFrame[2LL * frame + (inside ? 1 : 0)];
+        f.frame = frame;
+        f.inside = inside;
+        if (m[3].matched)
+            f.parts.emplace_back(std::stoi(m[4].str()), e.path().string());
         else
             f.whole = e.path().string();
     }

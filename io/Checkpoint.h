@@ -64,22 +64,26 @@ Checkpoint decodeCheckpoint(std::vector<char> bytes, const std::string& name);
 /// Reads only the header (cheap: the payload and its checksum are not read, readCheckpoint verifies them).
 CheckpointInfo readCheckpointInfo(const std::string& path);
 
-/// "<dir>/<scene>_checkpoint_NNNN.mpmc".
-std::string checkpointPath(const std::string& dir, const std::string& scene, int frame);
-/// Part `part` of a set: "<dir>/<scene>_checkpoint_NNNN_rankRRR.mpmc"; part -1: the set as a pattern,
+/// "<dir>/<scene>_checkpoint_NNNN.mpmc", the state after frame NNNN; `inside`: the state of a run stopped inside
+/// frame + 1, "<dir>/<scene>_checkpoint_MMMM_inside.mpmc" with MMMM = frame + 1, so that it never replaces the
+/// checkpoint written after frame `frame`.
+std::string checkpointPath(const std::string& dir, const std::string& scene, int frame, bool inside = false);
+/// Part `part` of a set: "<dir>/<scene>_checkpoint_NNNN[_inside]_rankRRR.mpmc"; part -1: the set as a pattern,
 /// "..._NNNN_rank*.mpmc" (for messages).
-std::string checkpointPartPath(const std::string& dir, const std::string& scene, int frame, int part);
+std::string checkpointPartPath(const std::string& dir, const std::string& scene, int frame, int part, bool inside = false);
 
 /// The files of one frame's checkpoint: a whole one, or the part files found (by part number; not yet checked
 /// to be one complete set).
 struct CheckpointFiles {
-    int frame = 0;
-    std::string whole;                               ///< empty when the frame has none
+    int frame = 0;        ///< the frames done when it was written
+    bool inside = false;  ///< written inside frame + 1 (a stopped run): newer than frame's own, older than frame + 1's
+    std::string whole;    ///< empty when the frame has none
     std::vector<std::pair<int, std::string>> parts;  ///< (part, path), by part
     /// Every file, whole and parts.
     std::vector<std::string> all() const;
 };
-/// The checkpoints of exactly this scene in dir, frame by frame, newest first.
+/// The checkpoints of exactly this scene in dir, newest first (one stopped inside a frame between that frame's
+/// and the one before).
 std::vector<CheckpointFiles> listCheckpoints(const std::string& dir, const std::string& scene);
 /// The paths of a complete set among `files.parts` (part 0 .. N-1 of one set, N from their headers), or a
 /// CheckpointError saying what is missing or mixed. Reads headers only.

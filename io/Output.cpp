@@ -54,8 +54,9 @@ FrameWriter FrameWriter::partWriter(const SceneDesc& scene, const SpeciesLayout&
 }
 
 void FrameWriter::configure(const SceneDesc& scene) {
-    bodies_ = std::size_t(
-        std::count_if(scene.colliders.begin(), scene.colliders.end(), [](const ColliderDesc& c) { return c.dynamic.enabled; }));
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i)
+        if (scene.colliders[i].dynamic.enabled) bodyColliders_.push_back(int(i));
+    bodies_ = bodyColliders_.size();
     for (const ParticleSetDesc& d : scene.sets) attributes_.setColours.push_back(d.colour);
     // The surface resolves the particle spacing of the first set; the sphere radius is a multiple of it.
     const double particlesPerCell = scene.sets.empty() ? 8.0 : scene.sets.front().particlesPerCell;
@@ -77,16 +78,46 @@ std::map<int, std::string> statsRows(const std::string& csv) {
     return rows;
 }
 
-void FrameWriter::writeStats() {
-    if (kept_.empty()) {
-        writeTextAtomically(dir_ + "/stats.csv", csv_);
-        return;
+std::string bodiesCsv(const std::string& statsCsv, const std::vector<int>& colliders) {
+    std::string out = "frame,time,body,collider,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n";
+    const std::size_t numbers = RigidBodyState::kDoubles * colliders.size();
+    std::istringstream in(statsCsv);
+    std::string line;
+    std::getline(in, line);  // the header
+    while (std::getline(in, line)) {
+        // The bodies' numbers end the row (no quoted field among them); frame and time lead it.
+        std::vector<std::string> tail(numbers);
+        std::size_t end = line.size();
+        bool whole = true;
+        for (std::size_t n = numbers; n-- > 0 && whole;) {
+            const std::size_t comma = end > 0 ? line.rfind(',', end - 1) : std::string::npos;
+            if (comma == std::string::npos)
+                whole = false;
+            else
+                tail[n] = line.substr(comma + 1, end - comma - 1), end = comma;
+        }
+        const std::size_t first = line.find(','), second = line.find(',', first + 1);
+        if (!whole || second == std::string::npos) continue;
+        const std::string lead = line.substr(0, second);
+        for (std::size_t k = 0; k < colliders.size(); ++k) {
+            out += lead + "," + std::to_string(k) + "," + std::to_string(colliders[k]);
+            for (std::size_t c = 0; c < RigidBodyState::kDoubles; ++c) out += "," + tail[k * RigidBodyState::kDoubles + c];
+            out += "\n";
+        }
     }
-    std::map<int, std::string> rows = statsRows(csv_);
-    for (const auto& [frame, row] : kept_) rows[frame] = row;
-    std::string text = FrameStats::csvHeader(bodies_) + "\n";
-    for (const auto& [frame, row] : rows) text += row + "\n";
+    return out;
+}
+
+void FrameWriter::writeStats() {
+    std::string text = csv_;
+    if (!kept_.empty()) {
+        std::map<int, std::string> rows = statsRows(csv_);
+        for (const auto& [frame, row] : kept_) rows[frame] = row;
+        text = FrameStats::csvHeader(bodies_) + "\n";
+        for (const auto& [frame, row] : rows) text += row + "\n";
+    }
     writeTextAtomically(dir_ + "/stats.csv", text);
+    if (bodies_ > 0) writeTextAtomically(dir_ + "/bodies.csv", bodiesCsv(text, bodyColliders_));
 }
 
 FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory,
@@ -144,6 +175,17 @@ void FrameWriter::writeFrame(int frame, const std::vector<AnySpecies>& species, 
     r.surfaces = surfaces_;
     r.materialNames = materialSceneNames();
     r.setNames = layout_.setNames;
+    // The bodies go into the whole frame, or rank 0's part of it.
+    if (part_ <= 0 && stats.bodies.size() == bodyColliders_.size())
+        for (std::size_t k = 0; k < stats.bodies.size(); ++k) {
+            const RigidBodyState& b = stats.bodies[k];
+            const Eigen::Quaterniond& q = b.orientation;
+            r.bodies.x.push_back(b.centre);
+            r.bodies.orient.push_back({float(q.x()), float(q.y()), float(q.z()), float(q.w())});
+            r.bodies.v.push_back(b.velocity.cast<float>());
+            r.bodies.w.push_back(b.spin.cast<float>());
+            r.bodies.collider.push_back(bodyColliders_[k]);
+        }
     const PointCloud cloud = gatherPoints(species, layout_.materialOfSpecies, attributes_);
     if (o.points || o.surface || o.density || o.velocity) writeVdbFrame(r, cloud);
     if (o.ply) writePly(framePath(frame, "", ".ply"), cloud);

@@ -44,9 +44,10 @@ private:
     OutputDesc output_;
     SpeciesLayout layout_;
     std::vector<SurfaceGroup> surfaces_;
-    PointAttributes attributes_;    ///< Cd per set and the extra attributes asked for
-    double particleSpacing_ = 0.0;  ///< what the surface resolves
-    std::size_t bodies_ = 0;        ///< dynamic colliders: their columns in stats.csv
+    PointAttributes attributes_;      ///< Cd per set and the extra attributes asked for
+    double particleSpacing_ = 0.0;    ///< what the surface resolves
+    std::size_t bodies_ = 0;          ///< dynamic colliders: their columns in stats.csv
+    std::vector<int> bodyColliders_;  ///< each body's collider, by its index in the scene's list
     std::string dir_;
     std::string csv_;
     std::map<int, std::string> kept_;
@@ -54,9 +55,15 @@ private:
     int part_ = -1;  ///< the rank whose part files this writes; -1: whole frames
     FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory, int part);
     void configure(const SceneDesc& scene);
-    /// Writes stats.csv: the rows written, with the kept rows in place of theirs and after them.
+    /// Writes stats.csv: the rows written, with the kept rows in place of theirs and after them; and, where the scene
+    /// has rigid bodies, bodies.csv from the same rows.
     void writeStats();
 };
+
+/// bodies.csv made from stats.csv's text: for each frame row and body k, "frame,time,body,collider," and the 13
+/// numbers of its body<k>_* columns (x, y, z, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz); `colliders[k]` is body k's
+/// index in the scene's collider list.
+std::string bodiesCsv(const std::string& statsCsv, const std::vector<int>& colliders);
 
 /// The rows of a stats.csv by frame, the header left out (an empty map for a missing or empty file).
 std::map<int, std::string> statsRows(const std::string& csv);

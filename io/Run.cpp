@@ -35,11 +35,11 @@ std::regex framesOf(const std::string& scene) {
     return std::regex("^" + regexEscape(scene) + R"(_(points_)?[0-9]{4,}(_rank[0-9]{3,})?\.(vdb|ply)$)");
 }
 std::regex checkpointsOf(const std::string& scene) {
-    return std::regex("^" + regexEscape(scene) + R"(_checkpoint_[0-9]{4,}(_rank[0-9]{3,})?\.mpmc$)");
+    return std::regex("^" + regexEscape(scene) + R"(_checkpoint_[0-9]{4,}(_inside)?(_rank[0-9]{3,})?\.mpmc$)");
 }
 /// The temporary files this program writes, of any scene (one run per directory: none is in use now).
 const std::regex kTemporary(
-    R"(^(.+_(points_|checkpoint_)?[0-9]{4,}(_rank[0-9]{3,})?\.(vdb|ply|mpmc)|stats\.csv|scene\.json)\.tmp[0-9]+$)");
+    R"(^(.+_(points_|checkpoint_)?[0-9]{4,}(_inside)?(_rank[0-9]{3,})?\.(vdb|ply|mpmc)|stats\.csv|bodies\.csv|scene\.json)\.tmp[0-9]+$)");
 
 /// Runs fn on the ranks where `here` is true and has every rank throw what the first of them to fail threw,
 /// as the same kind of error, so that all of them stop together and one of them reports it.
@@ -247,11 +247,12 @@ void SceneRun::guarded(const std::string& what, F&& f) {
 
 void SceneRun::refuseNamesTooLong() const {
     // The longest name a run writes: a checkpoint part's, with its frame's digits and the atomic write's temporary
-    // suffix (<scene>_checkpoint_NNNN_rankRRR.mpmc.tmpPID). Found now, not at the first frame's write minutes later.
+    // suffix (<scene>_checkpoint_NNNN_inside_rankRRR.mpmc.tmpPID). Found now, not at the first frame's write minutes
+    // later.
     constexpr std::size_t kPidDigits = 10;
     const std::size_t frameDigits = std::max<std::size_t>(4, std::to_string(scene_.frames).size());
     const std::size_t longest =
-        scene_.name.size() + std::strlen("_checkpoint_") + frameDigits + std::strlen("_rank000.mpmc.tmp") + kPidDigits;
+        scene_.name.size() + std::strlen("_checkpoint_") + frameDigits + std::strlen("_inside_rank000.mpmc.tmp") + kPidDigits;
     const long limit = ::pathconf(dir_.c_str(), _PC_NAME_MAX);
     if (limit > 0 && longest > std::size_t(limit))
         throw SceneError(scene_.file + ": the scene's name (its file's, " + std::to_string(scene_.name.size()) +
@@ -274,9 +275,9 @@ void SceneRun::refuseAnotherScenesDirectory() const {
         return;  // not a record of ours: nothing of a scene to protect
     }
     if (owner.empty() || owner == scene_.name) return;
-    throw SceneError(dir_ + ": holds the frames of scene \"" + owner +
-                     "\" (its scene.json); an output directory holds one scene's " +
-                     "frames, stats.csv and scene.json: give scene \"" + scene_.name + "\" a directory of its own with -o");
+    throw SceneError(
+        dir_ + ": holds the frames of scene \"" + owner + "\" (its scene.json); an output directory holds one scene's " +
+        "frames, stats.csv, bodies.csv and scene.json: give scene \"" + scene_.name + "\" a directory of its own with -o");
 }
 
 void SceneRun::removeStaleTemporaries() {
@@ -298,6 +299,10 @@ void SceneRun::removeOldOutputs() {
             fs::remove(e.path(), ec))
             ++removed;
     }
+    // An earlier run's rigid bodies: this run writes its own bodies.csv, or none when the scene has no body.
+    if (std::none_of(scene_.colliders.begin(), scene_.colliders.end(), [](const ColliderDesc& c) { return c.dynamic.enabled; }) &&
+        fs::remove(dir_ + "/bodies.csv", ec))
+        ++removed;
     if (removed)
         events_.note("removed " + std::to_string(removed) + " frame and checkpoint files of an earlier run of this scene");
 }
@@ -407,7 +412,7 @@ bool SceneRun::readCheckpointOf(const CheckpointFiles& files, Checkpoint& c, boo
         events_.warning(partError + "; trying the one before");
         return false;
     }
-    path = checkpointPartPath(dir_, scene_.name, files.frame, -1);
+    path = checkpointPartPath(dir_, scene_.name, files.frame, -1, files.inside);
     if (comm.distributed()) {
         // Ranks that read no part (more ranks than parts) need the run's scalars and species, without particles.
         Bytes skeleton;
@@ -436,7 +441,7 @@ void SceneRun::saveCheckpoint() {
     // What one process would write: on several ranks the particles are gathered to rank 0 first.
     const SimState gathered = comm.distributed() ? sim_->gatherState() : SimState{};
     const SimState& s = comm.distributed() ? gathered : sim_->state();
-    lastCheckpoint_ = checkpointPath(dir_, scene_.name, s.frame);
+    lastCheckpoint_ = checkpointPath(dir_, scene_.name, s.frame, s.frameSubsteps > 0);
     onRoot(comm, [&] { writeCheckpointFiles(s); });
 }
 
@@ -456,23 +461,35 @@ void SceneRun::saveCheckpointParts() {
     info.part = comm.rank();
     info.parts = comm.size();
     info.set.assign(reinterpret_cast<const char*>(id.data()), id.size());
-    lastCheckpoint_ = checkpointPartPath(dir_, scene_.name, s.frame, -1);
-    agreeOnFailure(comm, true, [&] { writeCheckpoint(checkpointPartPath(dir_, scene_.name, s.frame, comm.rank()), info, s); });
-    // The set is whole: what else this frame had (a whole checkpoint, parts of a larger set) and the older
-    // sets beyond those kept go.
-    onRoot(comm, [&] {
-        std::error_code ec;
-        const auto all = listCheckpoints(dir_, scene_.name);
-        for (std::size_t i = 0; i < all.size(); ++i) {
-            if (all[i].frame == s.frame) {
-                if (!all[i].whole.empty()) fs::remove(all[i].whole, ec);
-                for (const auto& [k, p] : all[i].parts)
-                    if (k >= comm.size()) fs::remove(p, ec);
-            } else if (i >= std::size_t(scene_.output.checkpointsKept)) {
-                for (const std::string& p : all[i].all()) fs::remove(p, ec);
-            }
+    const bool inside = s.frameSubsteps > 0;
+    lastCheckpoint_ = checkpointPartPath(dir_, scene_.name, s.frame, -1, inside);
+    agreeOnFailure(comm, true,
+                   [&] { writeCheckpoint(checkpointPartPath(dir_, scene_.name, s.frame, comm.rank(), inside), info, s); });
+    // The set is whole: what else this checkpoint had (a whole file, parts of a larger set) and older ones go.
+    onRoot(comm, [&] { rotateCheckpoints(s, comm.size()); });
+}
+
+void SceneRun::rotateCheckpoints(const SimState& s, int parts) {
+    // The one just written (whole when parts is 0) replaces what else was written at its moment; a checkpoint of a
+    // stopped run goes once a newer one exists, and of those after whole frames the newest `checkpoints_kept` stay.
+    const bool inside = s.frameSubsteps > 0;
+    const auto order = [](int frame, bool in) { return 2LL * frame + (in ? 1 : 0); };
+    const long long written = order(s.frame, inside);
+    std::error_code ec;
+    std::size_t afterFrames = 0;
+    for (const CheckpointFiles& c : listCheckpoints(dir_, scene_.name)) {
+        const long long at = order(c.frame, c.inside);
+        if (at == written) {
+            if (parts > 0 && !c.whole.empty()) fs::remove(c.whole, ec);
+            for (const auto& [k, p] : c.parts)
+                if (parts == 0 || k >= parts) fs::remove(p, ec);
+        } else if (c.inside && at < written) {
+            for (const std::string& p : c.all()) fs::remove(p, ec);
+            continue;
         }
-    });
+        if (!c.inside && afterFrames++ >= std::size_t(scene_.output.checkpointsKept))
+            for (const std::string& p : c.all()) fs::remove(p, ec);
+    }
 }
 
 CheckpointInfo SceneRun::checkpointInfo(const SimState& s, bool withStats) const {
@@ -501,17 +518,8 @@ bool SceneRun::supersededCheckpoint(int frame) const {
 }
 
 void SceneRun::writeCheckpointFiles(const SimState& s) {
-    const std::string path = checkpointPath(dir_, scene_.name, s.frame);
-    writeCheckpoint(path, checkpointInfo(s, true), s);
-    // Keep the newest ones; parts of this frame (an earlier per-rank set) go.
-    const auto all = listCheckpoints(dir_, scene_.name);
-    std::error_code ec;
-    for (std::size_t i = 0; i < all.size(); ++i) {
-        if (all[i].frame == s.frame)
-            for (const auto& [k, p] : all[i].parts) fs::remove(p, ec);
-        if (i >= std::size_t(scene_.output.checkpointsKept))
-            for (const std::string& p : all[i].all()) fs::remove(p, ec);
-    }
+    writeCheckpoint(checkpointPath(dir_, scene_.name, s.frame, s.frameSubsteps > 0), checkpointInfo(s, true), s);
+    rotateCheckpoints(s, 0);
 }
 
 void SceneRun::reportRanks() {

@@ -93,6 +93,9 @@ private:
     void writeCheckpointFiles(const SimState& state);
     /// output.rank_files = "per_rank" on several ranks: each rank writes its part of the set, nothing gathered.
     void saveCheckpointParts();
+    /// After a checkpoint of `state` was written (whole: parts = 0, else as that many parts): removes what it replaces
+    /// and what it makes old (a stopped run's checkpoint before it; those after frames beyond checkpoints_kept).
+    void rotateCheckpoints(const SimState& state, int parts);
     CheckpointInfo checkpointInfo(const SimState& state, bool withStats) const;
     void removeStaleTemporaries();
     void removeOldOutputs();

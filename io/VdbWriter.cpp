@@ -33,6 +33,8 @@ struct ArrayView {
     static VdbT convert(const T& a) {
         if constexpr (std::is_arithmetic_v<T>)
             return VdbT(a);
+        else if constexpr (std::is_same_v<T, std::array<float, 4>>)
+            return VdbT(a[0], a[1], a[2], a[3]);
         else if constexpr (std::is_same_v<T, Mat3f>)
             return VdbT(a(0, 0), a(0, 1), a(0, 2), a(1, 0), a(1, 1), a(1, 2), a(2, 0), a(2, 1), a(2, 2));  // row-major both
         else
@@ -111,6 +113,21 @@ PointDataGrid::Ptr makePoints(const PointCloud& f, double voxelSize, const VdbFr
         const auto groups = addGroups(*grid, *index, f, full->materialNames, full->setNames);
         grid->insertMeta("group_names", openvdb::StringMetadata(nlohmann::json(groups).dump()));
     }
+    return grid;
+}
+
+/// One point per rigid body (BodyPoints), positions at full precision (a body's pose is read, not rendered
+/// from), in voxels of the points grid's size.
+PointDataGrid::Ptr makeBodies(const BodyPoints& b, double voxelSize) {
+    const auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
+    const ArrayView<openvdb::Vec3d, Vec3d> positions{b.x};
+    auto index = openvdb::tools::createPointIndexGrid<openvdb::tools::PointIndexGrid>(positions, *xform);
+    auto grid = openvdb::points::createPointDataGrid<openvdb::points::NullCodec, PointDataGrid>(*index, positions, *xform);
+    addAttribute<openvdb::math::Quats>(*grid, *index, "orient", b.orient);
+    addAttribute<openvdb::Vec3s>(*grid, *index, "v", b.v);
+    addAttribute<openvdb::Vec3s>(*grid, *index, "w", b.w);
+    addAttribute<int32_t>(*grid, *index, "collider", b.collider);
+    grid->setName("bodies");
     return grid;
 }
 
@@ -199,6 +216,9 @@ std::size_t writeVdbFrame(const VdbFrameRequest& r, const PointCloud& flat) {
         }
     }
     if (r.velocity && !flat.x.empty()) volumes.push_back(velocityGrid(flat, r.surfaceVoxelSize));
+    // Beside the points (Blender reads a volume file only while it holds no point grid).
+    if (r.points && !r.bodies.x.empty())
+        (r.pointsPath.empty() ? volumes : pointGrids).push_back(makeBodies(r.bodies, r.pointVoxelSize));
     if (!pointGrids.empty()) writeFile(r.pointsPath, pointGrids);
     if (!volumes.empty() || r.pointsPath.empty()) writeFile(r.volumePath, volumes);
     return flat.x.size();
@@ -268,6 +288,34 @@ PointsReadBack readVdbPoints(const std::string& path) {
                 out.F.push_back(e);
             }
             for (auto& [members, handle] : groups) members->push_back(handle.get(*it));
+        }
+    }
+    return out;
+}
+
+BodyPoints readVdbBodies(const std::string& path) {
+    openvdb::initialize();
+    openvdb::io::File file(path);
+    file.open();
+    BodyPoints out;
+    if (!file.hasGrid("bodies")) return out;
+    auto grid = openvdb::gridPtrCast<PointDataGrid>(file.readGrid("bodies"));
+    file.close();
+    if (!grid) throw std::runtime_error(path + ": grid \"bodies\" is not a PointDataGrid");
+    for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf) {
+        openvdb::points::AttributeHandle<openvdb::Vec3f> P(leaf->constAttributeArray("P"));
+        openvdb::points::AttributeHandle<openvdb::math::Quats> orient(leaf->constAttributeArray("orient"));
+        openvdb::points::AttributeHandle<openvdb::Vec3f> v(leaf->constAttributeArray("v")), w(leaf->constAttributeArray("w"));
+        openvdb::points::AttributeHandle<int32_t> collider(leaf->constAttributeArray("collider"));
+        for (auto it = leaf->beginIndexOn(); it; ++it) {
+            const openvdb::Vec3d world = grid->transform().indexToWorld(P.get(*it) + it.getCoord().asVec3d());
+            out.x.emplace_back(world[0], world[1], world[2]);
+            const openvdb::math::Quats q = orient.get(*it);
+            out.orient.push_back({q.x(), q.y(), q.z(), q.w()});
+            const openvdb::Vec3f a = v.get(*it), b = w.get(*it);
+            out.v.emplace_back(a[0], a[1], a[2]);
+            out.w.emplace_back(b[0], b[1], b[2]);
+            out.collider.push_back(collider.get(*it));
         }
     }
     return out;

@@ -1,8 +1,9 @@
 #pragma once
 // Per-frame VDB output for Houdini and Blender: a PointDataGrid "points" (P fixed-point, v, id, material,
 // set), narrow-band level sets "surface" built from the particles with OpenVDB's own rasteriser, and
-// optionally a fog volume "density" and a velocity grid "vel". OpenVDB's heavy headers live only in
-// VdbWriter.cpp.
+// optionally a fog volume "density" and a velocity grid "vel", and where the scene has rigid bodies a
+// PointDataGrid "bodies" of one point each. OpenVDB's heavy headers live only in VdbWriter.cpp.
+#include <array>
 #include <map>
 #include <string>
 #include <vector>
@@ -10,6 +11,16 @@
 #include "io/PointCloud.h"
 
 namespace mpm {
+
+/// The rigid bodies at a frame, one point each, as Houdini instances geometry: P (centre of mass), orient (a unit
+/// quaternion in Houdini's order x, y, z, w: the turn from the scene's placement), v, w (angular velocity, rad/s)
+/// and collider (the body's index in the scene's collider list, to copy its geometry onto the point).
+struct BodyPoints {
+    std::vector<Vec3d> x;
+    std::vector<std::array<float, 4>> orient;
+    std::vector<Vec3f> v, w;
+    std::vector<int32_t> collider;
+};
 
 struct SurfaceGroup {
     std::string gridName;      ///< "surface", or "surface_<material or set>"
@@ -29,6 +40,7 @@ struct VdbFrameRequest {
     int surfaceSmooth = 0;
     std::vector<SurfaceGroup> surfaces;
     std::vector<std::string> materialNames, setNames;  ///< what the cloud's material and set indices mean
+    BodyPoints bodies;                                 ///< written as the grid "bodies" beside the volumes when there are any
 };
 
 /// Writes the requested grids atomically. Returns the number of particles written.
@@ -48,6 +60,8 @@ struct PointsReadBack {
     std::map<std::string, std::vector<bool>> groups;   ///< point group -> membership, point by point
 };
 PointsReadBack readVdbPoints(const std::string& path);
+/// Reads back the "bodies" grid of a file (empty when it has none).
+BodyPoints readVdbBodies(const std::string& path);
 
 /// Names of the grids in a VDB file.
 std::vector<std::string> vdbGridNames(const std::string& path);

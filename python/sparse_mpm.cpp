@@ -125,6 +125,52 @@ public:
         for (std::size_t k = 0; k < n; ++k) velocities[k] = Vec3f(v.data()[3 * k], v.data()[3 * k + 1], v.data()[3 * k + 2]);
         sim_->setVelocities(velocities);
     }
+    /// Each rigid body now: its collider's index, mass, world inertia tensor and state.
+    py::list bodies() const {
+        py::list out;
+        for (std::size_t k = 0; k < sim_->bodies().size(); ++k) {
+            const Simulation::Body& b = sim_->bodies()[k];
+            const RigidBodyState& s = sim_->state().bodies[k];
+            py::dict d = bodyState(s);
+            d["collider"] = b.collider;
+            d["mass"] = b.model.mass;
+            const Mat3d I = b.model.worldInertia(s.orientation);
+            d["inertia"] = std::vector<std::vector<double>>{
+                {I(0, 0), I(0, 1), I(0, 2)}, {I(1, 0), I(1, 1), I(1, 2)}, {I(2, 0), I(2, 1), I(2, 2)}};
+            out.append(d);
+        }
+        return out;
+    }
+    /// fn(body, dt, impulse, angular_impulse, state) after every substep, in place of the built-in rigid-body solver
+    /// (core/Simulation.h, setBodyDriver); it returns the state the next substep starts from (a dict with any of
+    /// centre, orientation, velocity, spin), or None to leave it. None instead of fn restores the built-in solver.
+    void setBodyDriver(py::object fn) {
+        driver_ = fn;
+        if (fn.is_none()) {
+            sim_->setBodyDriver(nullptr);
+            return;
+        }
+        sim_->setBodyDriver([this](std::size_t k, double dt, const Vec3d& J, const Vec3d& L, RigidBodyState& s) {
+            py::gil_scoped_acquire hold;  // advance() runs the substeps without it
+            const py::object r = driver_(k, dt, triple(J), triple(L), bodyState(s));
+            if (r.is_none()) return;
+            const py::dict d = r.cast<py::dict>();
+            const auto vec = [&](const char* key, Vec3d& to) {
+                if (!d.contains(key)) return;
+                const auto v = d[key].cast<std::vector<double>>();
+                if (v.size() != 3) throw py::value_error(std::string("body driver: ") + key + " must have 3 numbers");
+                to = Vec3d(v[0], v[1], v[2]);
+            };
+            vec("centre", s.centre);
+            vec("velocity", s.velocity);
+            vec("spin", s.spin);
+            if (d.contains("orientation")) {
+                const auto q = d["orientation"].cast<std::vector<double>>();
+                if (q.size() != 4) throw py::value_error("body driver: orientation must be a quaternion w, x, y, z");
+                s.orientation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+            }
+        });
+    }
     int frame() const { return sim_->frame(); }
     double time() const { return sim_->time(); }
     std::vector<std::string> materialNames() const { return materialSceneNames(); }
@@ -136,6 +182,17 @@ private:
     SpeciesLayout layout_;
     std::unique_ptr<Simulation> sim_;
     PointAttributes attributes_;
+    py::object driver_;
+
+    static std::vector<double> triple(const Vec3d& v) { return {v[0], v[1], v[2]}; }
+    static py::dict bodyState(const RigidBodyState& s) {
+        py::dict d;
+        d["centre"] = triple(s.centre);
+        d["orientation"] = std::vector<double>{s.orientation.w(), s.orientation.x(), s.orientation.y(), s.orientation.z()};
+        d["velocity"] = triple(s.velocity);
+        d["spin"] = triple(s.spin);
+        return d;
+    }
 };
 
 }  // namespace
@@ -197,6 +254,16 @@ PYBIND11_MODULE(sparse_mpm, m) {
         .def("stats", &PySimulation::stats, "Statistics of the state now (mass, momentum, energies, ...).")
         .def("set_velocities", &PySimulation::setVelocities, py::arg("v"),
              "Sets every particle's velocity, in particles()' order.")
+        .def("bodies", &PySimulation::bodies,
+             "Each rigid body now (colliders with \"dynamic\"): a dict of collider (its index), mass, inertia (world, "
+             "3x3), centre (of mass), orientation (w, x, y, z: the turn from the scene's placement), velocity, spin.")
+        .def("set_body_driver", &PySimulation::setBodyDriver, py::arg("fn"),
+             "Drives the rigid bodies from an outside solver: fn(body, dt, impulse, angular_impulse, state) is called for "
+             "each body after every substep with the impulse and angular impulse (about the centre of mass) the material "
+             "gave it in that substep and its state (a dict as bodies() gives, moved to the pose the substep used, "
+             "velocities as before); it returns the state the next substep starts from (a dict with any of centre, "
+             "orientation, velocity, spin) or None. It replaces gravity, the exchange and contact of the built-in solver; "
+             "None instead of fn restores it.")
         .def_property_readonly("frame", &PySimulation::frame)
         .def_property_readonly("time", &PySimulation::time)
         .def_property_readonly("material_names", &PySimulation::materialNames)

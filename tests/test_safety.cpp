@@ -148,6 +148,42 @@ TEST(Safety, SignalsStopAtASubstepWithACheckpointAndTheRunResumes) {
     EXPECT_EQ(again.output.find("took over the lock"), std::string::npos) << again.output;
 }
 
+TEST(Safety, ACtrlCInsideAFrameKeepsTheCheckpointWrittenAfterTheFrameBefore) {
+    // The checkpoint of a run stopped inside frame N was stored under frame N-1's name, replacing the one written
+    // after frame N-1. Now it is <scene>_checkpoint_NNNN_inside.mpmc beside it; --resume continues from it to the
+    // uninterrupted run's bits, and it goes once a newer checkpoint is written. 60 substeps a frame make a frame
+    // last far longer than the 1 ms poll, so the stop lands inside frame 3.
+    const std::string dir = tempDir("inside");
+    std::string text = kScene;
+    text.replace(text.find("\"substeps\": 4"), std::strlen("\"substeps\": 4"), "\"substeps\": 60");
+    text.replace(text.find("\"frames\": 14"), std::strlen("\"frames\": 14"), "\"frames\": 5");
+    const std::string scene = writeFile(dir + "/flow.json", text);
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/ref", "--quiet"}, dir).code, 0);
+    const std::string out = dir + "/out";
+    Child c = start({"run", scene, "-o", out}, dir + "/child.log");
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(3);
+    while (!fs::exists(out + "/flow_checkpoint_0002.mpmc") && std::chrono::steady_clock::now() < deadline)
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ::kill(c.pid, SIGINT);
+    EXPECT_EQ(c.wait(), 130);
+    const std::string said = c.output();
+    ASSERT_NE(said.find("stopped by SIGINT inside frame 3 "), std::string::npos) << said;
+    EXPECT_NE(said.find("the state is in " + out + "/flow_checkpoint_0003_inside.mpmc"), std::string::npos) << said;
+    const CheckpointInfo after2 = readCheckpointInfo(out + "/flow_checkpoint_0002.mpmc");
+    EXPECT_EQ(after2.frame, 2);
+    EXPECT_FALSE(after2.midFrame);
+    const CheckpointInfo inside3 = readCheckpointInfo(out + "/flow_checkpoint_0003_inside.mpmc");
+    EXPECT_EQ(inside3.frame, 2);
+    EXPECT_TRUE(inside3.midFrame);
+    const Result r = runMpm({"run", scene, "-o", out, "--resume"}, dir);
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("continuing from " + out + "/flow_checkpoint_0003_inside.mpmc (inside frame 3"), std::string::npos)
+        << r.output;
+    expectSameOutput(dir + "/ref", out, "flow", 10);
+    EXPECT_FALSE(fs::exists(out + "/flow_checkpoint_0003_inside.mpmc"));  // superseded by frame 3's own
+    EXPECT_TRUE(fs::exists(out + "/flow_checkpoint_0005.mpmc"));
+}
+
 TEST(Safety, CtrlCDuringTheSetUpOfALargeSceneActsAtOnceAndTouchesNothing) {
     // A million particles sampled Poisson-disk take seconds to set up (4.1 million took 25 s here), during which the run
     // said nothing and a Ctrl-C waited for the set-up to end (31 s for a radius given in cm as m). Now the run says

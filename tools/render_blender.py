@@ -21,6 +21,7 @@ less than --min-coverage of it (the CTest tests labelled `blender`).
 """
 import argparse
 import colorsys
+import csv
 import glob
 import json
 import math
@@ -110,12 +111,30 @@ class Scene:
         # A set's own colour (its points' Cd, linear RGB), where the scene gives one.
         self.set_colour = {st.get("name", ""): tuple(float(c) for c in st["color"])
                            for st in s.get("sets", []) if len(st.get("color", [])) == 3}
+        # The rigid bodies' poses by collider and frame, from the run's bodies.csv beside scene.json.
+        self.bodies = {}
+        bodies = os.path.join(os.path.dirname(os.path.abspath(path)), "bodies.csv")
+        if os.path.isfile(bodies):
+            with open(bodies) as f:
+                for row in csv.DictReader(f):
+                    pose = (Vector(tuple(float(row[k]) for k in ("x", "y", "z"))),
+                            Quaternion(tuple(float(row[k]) for k in ("qw", "qx", "qy", "qz"))))
+                    self.bodies.setdefault(int(row["collider"]), {})[int(row["frame"])] = pose
         source = s.get("scene_file", "")
         if source:
             self.base = os.path.dirname(source)
         elif any(c.get("file") for c in self.colliders):
             print("render_blender: warning: %s has no scene_file; file colliders are looked for beside it" % path)
             self.base = os.path.dirname(os.path.abspath(path))
+
+    def body_pose(self, collider, frame):
+        """A rigid body's centre of mass and turn from the scene's placement at the frame (the last row at or before
+        it); None for a collider that is not a body of this run."""
+        rows = self.bodies.get(collider)
+        if not rows:
+            return None
+        done = [f for f in rows if f <= frame]
+        return rows[max(done) if done else min(rows)]
 
     def asset(self, name):
         return name if os.path.isabs(name) else os.path.join(self.base, name)
@@ -139,6 +158,17 @@ class Scene:
         materials = {self.set_material[n] for n in sets}
         material = key if key in MATERIAL_COLOURS else (materials.pop() if len(materials) == 1 else "")
         return MATERIAL_COLOURS.get(material, PALETTE[index % len(PALETTE)])
+
+
+def collider_matrix(scene, index, c, frame, rest):
+    """What places collider `index` (object at its rest placement `rest`) at the frame: its motion, or for a rigid
+    body its pose from bodies.csv: x = x_com + R (x_rest - c_rest), the rest centre of mass being the box's, sphere's
+    or cylinder's centre, where `rest` puts the object's origin."""
+    pose = scene.body_pose(index, frame) if c.get("dynamic") else None
+    if pose is None:
+        return motion_matrix(c.get("motion"), frame / scene.fps, scene.fps)
+    centre, turn = pose
+    return Matrix.Translation(centre) @ turn.to_matrix().to_4x4() @ Matrix.Translation(-rest.translation)
 
 
 def motion_matrix(motion, t, fps):
@@ -426,7 +456,6 @@ def add_colliders(scene, frame, root, material=None, towards=None):
     towards the camera see-through; a collider around the material (its box holds the middle of `material`'s
     bounds: a glass, a bowl) is cut by the plane through that middle facing the camera (`towards`), so that the
     near side of neither hides what it holds."""
-    t = frame / scene.fps
     out = []
     for i, c in enumerate(scene.colliders):
         made = collider_object(c, scene, frame, root)
@@ -436,7 +465,7 @@ def add_colliders(scene, frame, root, material=None, towards=None):
         obj.name = "collider_%d_%s" % (i, c.get("type"))
         if obj.parent is not root:
             adopt(obj, root)
-        obj.matrix_basis = motion_matrix(c.get("motion"), t, scene.fps) @ rest
+        obj.matrix_basis = collider_matrix(scene, i, c, frame, rest) @ rest
         mat = principled("collider_%d" % i, COLLIDER_COLOUR, 0.6)
         middle = (material[0] + material[1]) / 2 if material else None
         if c.get("inside"):

@@ -2,8 +2,9 @@
 # CTest test (label "blender"): runs a small scene (water and a jelly, a floor, a box moving at 1 m/s) with PLY
 # frames, loads the output directory with tools/blender_import.py in headless Blender and checks what arrived
 # against the files: frame range, one meshed surface sequence per material (changing over time), the particles
-# with their attributes and values, the collider moved by v t (mpm's Y-up turned to Blender's Z-up). Exits 77
-# (skipped) without Blender.  Usage: test_blender_import.sh MPM_BINARY SOURCE_DIR WORK_DIR
+# with their attributes and values, the collider moved by v t (mpm's Y-up turned to Blender's Z-up), both with the
+# particles stored in the .blend (the default) and streamed from the PLYs; then opens the saved .blend with scripts
+# disabled (-Y) and checks that its particles still change with the frame. Exits 77 (skipped) without Blender.  Usage: test_blender_import.sh MPM_BINARY SOURCE_DIR WORK_DIR
 set -euo pipefail
 mpm="$1"; src="$2"; work="$3"
 if ! command -v blender >/dev/null 2>&1; then
@@ -19,16 +20,18 @@ cat >"$work/pour.json" <<'SCENE'
                  { "type": "box", "center": [-0.2, 0.1, 0.15], "size": [0.1, 0.2, 0.3], "motion": { "velocity": [1, 0, 0] } } ] }
 SCENE
 "$mpm" run "$work/pour.json" -o "$work/out" --quiet
+for mode in auto stream; do
 status=0
-blender -b --factory-startup --python-exit-code 1 -P "$src/tools/blender_import.py" -- "$work/out" --save "$work/pour.blend" \
-  --summary "$work/summary.json" >"$work/blender.log" 2>&1 || status=$?
+blender -b --factory-startup --python-exit-code 1 -P "$src/tools/blender_import.py" -- "$work/out" --save "$work/pour_$mode.blend" \
+  --summary "$work/summary.json" --particles $mode >"$work/blender.log" 2>&1 || status=$?
 grep -E "blender_import|Error" "$work/blender.log" || true
 [ $status -eq 0 ] || exit $status
-/usr/bin/python3 - "$work" <<'CHECK'
+/usr/bin/python3 - "$work" $mode <<'CHECK'
 import json, os, sys
 import numpy as np
-work = sys.argv[1]
+work, mode = sys.argv[1], sys.argv[2]
 s = json.load(open(os.path.join(work, "summary.json")))
+check_mode = {"auto": "embed", "stream": "stream"}[mode]
 fail = []
 def check(ok, what):
     print(("ok: " if ok else "FAILED: ") + what)
@@ -62,6 +65,47 @@ moved = np.array(box["6"]) - np.array(box["1"])
 check(np.allclose(moved, [5 / 24.0, 0, 0], atol=1e-6), "the box moved by v t = 5/24 m along x: %s" % moved)
 check(np.allclose(box["1"], [-0.2 + 1 / 24.0, -0.15, 0.1], atol=1e-6), "Y-up to Z-up: mpm (x, 0.1, 0.15) is Blender (x, -0.15, 0.1): %s" % box["1"])
 check("collider_0_plane" in s["colliders"], "the floor plane is drawn")
-check(os.path.getsize(os.path.join(work, "pour.blend")) > 0, "the .blend was saved")
+check(s["particle_mode"] == check_mode, "--particles %s: the particles are %s (%s)" % (mode, check_mode, s["particle_mode"]))
+check(os.path.getsize(os.path.join(work, "pour_%s.blend" % mode)) > 0, "the .blend was saved")
+sys.exit(1 if fail else 0)
+CHECK
+done
+# The stored particles play with the file's scripts disabled: each frame shows its own PLY's count, first id and position.
+blender -b -Y "$work/pour_auto.blend" --python-exit-code 1 --python-expr '
+import bpy, sys
+o = bpy.data.objects["mpm_particles"]
+for f in range(1, 7):
+    bpy.context.scene.frame_set(f)
+    m = o.evaluated_get(bpy.context.evaluated_depsgraph_get()).to_mesh()
+    c = m.vertices[0].co
+    print("replayed frame %d: %d particles, first id %d at %.7f %.7f %.7f" % (f, len(m.vertices), m.attributes["id"].data[0].value, c.x, c.y, c.z))
+' >"$work/replay.log" 2>&1
+grep "replayed" "$work/replay.log"
+/usr/bin/python3 - "$work" <<'CHECK'
+import os, re, sys
+work = sys.argv[1]
+import numpy as np
+said = {int(m.group(1)): (int(m.group(2)), int(m.group(3)), [float(m.group(k)) for k in (4, 5, 6)])
+        for m in re.finditer(r"replayed frame (\d+): (\d+) particles, first id (-?\d+) at (\S+) (\S+) (\S+)",
+                             open(os.path.join(work, "replay.log")).read())}
+def ply_first(frame):
+    """The PLY's particle count, and its first particle's id and position (mpm writes x, y, z as doubles first)."""
+    with open(os.path.join(work, "out", "pour_%04d.ply" % frame), "rb") as f:
+        names, n = [], 0
+        types = {"double": "<f8", "float": "<f4", "int": "<i4", "uchar": "u1"}
+        while True:
+            line = f.readline().decode().strip()
+            if line.startswith("element vertex"): n = int(line.split()[2])
+            elif line.startswith("property"): names.append((line.split()[2], types[line.split()[1]]))
+            elif line == "end_header": break
+        v = np.fromfile(f, dtype=np.dtype(names), count=n)
+        return n, int(v["id"][0]), [float(v[k][0]) for k in ("x", "y", "z")]
+fail = []
+for f in range(1, 7):
+    n, first, x = ply_first(f)
+    got = said.get(f)
+    ok = got is not None and got[0] == n and got[1] == first and np.allclose(got[2], x, atol=1e-6)
+    print(("ok: " if ok else "FAILED: ") + "frame %d replays without scripts: %s against the PLY's %d particles, id %d at %s" % (f, got, n, first, x))
+    ok or fail.append(f)
 sys.exit(1 if fail else 0)
 CHECK
