@@ -20,6 +20,22 @@ cat >"$work/pour.json" <<'SCENE'
                  { "type": "box", "center": [-0.2, 0.1, 0.15], "size": [0.1, 0.2, 0.3], "motion": { "velocity": [1, 0, 0] } } ] }
 SCENE
 "$mpm" run "$work/pour.json" -o "$work/out" --quiet
+# The checks below read the run's PLY frames with this.
+cat >"$work/plyframes.py" <<'READER'
+import os
+import numpy as np
+def ply(work, frame):
+    """The vertex element of out/pour_NNNN.ply (binary little-endian, as mpm writes it) as a numpy structured array."""
+    with open(os.path.join(work, "out", "pour_%04d.ply" % frame), "rb") as f:
+        names, n = [], 0
+        types = {"double": "<f8", "float": "<f4", "int": "<i4", "uchar": "u1"}
+        while True:
+            line = f.readline().decode().strip()
+            if line.startswith("element vertex"): n = int(line.split()[2])
+            elif line.startswith("property"): names.append((line.split()[2], types[line.split()[1]]))
+            elif line == "end_header": break
+        return np.fromfile(f, dtype=np.dtype(names), count=n)
+READER
 for mode in auto stream; do
 status=0
 blender -b --factory-startup --python-exit-code 1 -P "$src/tools/blender_import.py" -- "$work/out" --save "$work/pour_$mode.blend" \
@@ -30,6 +46,8 @@ grep -E "blender_import|Error" "$work/blender.log" || true
 import json, os, sys
 import numpy as np
 work, mode = sys.argv[1], sys.argv[2]
+sys.path.insert(0, work)
+from plyframes import ply
 s = json.load(open(os.path.join(work, "summary.json")))
 check_mode = {"auto": "embed", "stream": "stream"}[mode]
 fail = []
@@ -41,19 +59,8 @@ check(abs(s["fps"] - 24.0) < 1e-9, "24 fps")
 check(sorted(s["surfaces"]) == ["mpm_surface_jelly", "mpm_surface_water"], "one surface per material: %s" % s["surfaces"])
 sv = s["surface_vertices"]["mpm_surface_water"]
 check(sv["1"] > 0 and sv["6"] > 0 and sv["1"] != sv["6"], "the water surface is meshed and follows the sequence: %s" % sv)
-def ply(frame):
-    path = os.path.join(work, "out", "pour_%04d.ply" % frame)
-    with open(path, "rb") as f:
-        names, n = [], 0
-        types = {"double": "<f8", "float": "<f4", "int": "<i4", "uchar": "u1"}
-        while True:
-            line = f.readline().decode().strip()
-            if line.startswith("element vertex"): n = int(line.split()[2])
-            elif line.startswith("property"): names.append((line.split()[2], types[line.split()[1]]))
-            elif line == "end_header": break
-        return np.fromfile(f, dtype=np.dtype(names), count=n)
 for f in (1, 6):
-    v, p = ply(f), s["particles"][str(f)]
+    v, p = ply(work, f), s["particles"][str(f)]
     check(p["vertices"] == len(v), "frame %d: %d particles, as in the PLY" % (f, len(v)))
     check(set(["velocity", "id", "material", "set", "pscale", "Cd"]) <= set(p["attributes"]), "frame %d attributes %s" % (f, p["attributes"]))
     check(p["first_id"] == int(v["id"][0]), "frame %d: the first vertex is particle %d" % (f, v["id"][0]))
@@ -84,25 +91,16 @@ grep "replayed" "$work/replay.log"
 /usr/bin/python3 - "$work" <<'CHECK'
 import os, re, sys
 work = sys.argv[1]
+sys.path.insert(0, work)
 import numpy as np
+from plyframes import ply
 said = {int(m.group(1)): (int(m.group(2)), int(m.group(3)), [float(m.group(k)) for k in (4, 5, 6)])
         for m in re.finditer(r"replayed frame (\d+): (\d+) particles, first id (-?\d+) at (\S+) (\S+) (\S+)",
                              open(os.path.join(work, "replay.log")).read())}
-def ply_first(frame):
-    """The PLY's particle count, and its first particle's id and position (mpm writes x, y, z as doubles first)."""
-    with open(os.path.join(work, "out", "pour_%04d.ply" % frame), "rb") as f:
-        names, n = [], 0
-        types = {"double": "<f8", "float": "<f4", "int": "<i4", "uchar": "u1"}
-        while True:
-            line = f.readline().decode().strip()
-            if line.startswith("element vertex"): n = int(line.split()[2])
-            elif line.startswith("property"): names.append((line.split()[2], types[line.split()[1]]))
-            elif line == "end_header": break
-        v = np.fromfile(f, dtype=np.dtype(names), count=n)
-        return n, int(v["id"][0]), [float(v[k][0]) for k in ("x", "y", "z")]
 fail = []
 for f in range(1, 7):
-    n, first, x = ply_first(f)
+    v = ply(work, f)
+    n, first, x = len(v), int(v["id"][0]), [float(v[k][0]) for k in ("x", "y", "z")]
     got = said.get(f)
     ok = got is not None and got[0] == n and got[1] == first and np.allclose(got[2], x, atol=1e-6)
     print(("ok: " if ok else "FAILED: ") + "frame %d replays without scripts: %s against the PLY's %d particles, id %d at %s" % (f, got, n, first, x))
