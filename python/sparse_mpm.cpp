@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 #include <tbb/global_control.h>
 
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -145,6 +146,10 @@ public:
     /// (core/Simulation.h, setBodyDriver); it returns the state the next substep starts from (a dict with any of
     /// centre, orientation, velocity, spin), or None to leave it. None instead of fn restores the built-in solver.
     void setBodyDriver(py::object fn) {
+        if (!fn.is_none() && !PyCallable_Check(fn.ptr()))
+            throw py::type_error(
+                "set_body_driver: expected a function fn(body, dt, impulse, angular_impulse, state) or None, got " +
+                std::string(py::str(py::type::of(fn).attr("__name__"))));
         driver_ = fn;
         if (fn.is_none()) {
             sim_->setBodyDriver(nullptr);
@@ -153,22 +158,7 @@ public:
         sim_->setBodyDriver([this](std::size_t k, double dt, const Vec3d& J, const Vec3d& L, RigidBodyState& s) {
             py::gil_scoped_acquire hold;  // advance() runs the substeps without it
             const py::object r = driver_(k, dt, triple(J), triple(L), bodyState(s));
-            if (r.is_none()) return;
-            const py::dict d = r.cast<py::dict>();
-            const auto vec = [&](const char* key, Vec3d& to) {
-                if (!d.contains(key)) return;
-                const auto v = d[key].cast<std::vector<double>>();
-                if (v.size() != 3) throw py::value_error(std::string("body driver: ") + key + " must have 3 numbers");
-                to = Vec3d(v[0], v[1], v[2]);
-            };
-            vec("centre", s.centre);
-            vec("velocity", s.velocity);
-            vec("spin", s.spin);
-            if (d.contains("orientation")) {
-                const auto q = d["orientation"].cast<std::vector<double>>();
-                if (q.size() != 4) throw py::value_error("body driver: orientation must be a quaternion w, x, y, z");
-                s.orientation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
-            }
+            if (!r.is_none()) applyDriverResult(k, r, s);
         });
     }
     int frame() const { return sim_->frame(); }
@@ -185,6 +175,41 @@ private:
     py::object driver_;
 
     static std::vector<double> triple(const Vec3d& v) { return {v[0], v[1], v[2]}; }
+    /// What a body driver returned for body k, checked key by key: a mistake is an error naming the key, never
+    /// silently ignored (a misspelt key would leave the body where it is).
+    static void applyDriverResult(std::size_t k, const py::object& r, RigidBodyState& s) {
+        const std::string where = "body driver (body " + std::to_string(k) + "): ";
+        if (!py::isinstance<py::dict>(r))
+            throw py::type_error(where + "return a dict with any of centre, orientation, velocity, spin, or None; got " +
+                                 std::string(py::str(py::type::of(r).attr("__name__"))));
+        const auto numbers = [&](const std::string& key, const py::handle& value, std::size_t count) {
+            std::vector<double> v;
+            try {
+                v = value.cast<std::vector<double>>();
+            } catch (const py::cast_error&) {
+                throw py::type_error(where + key + " must be " + std::to_string(count) + " numbers");
+            }
+            if (v.size() != count) throw py::value_error(where + key + " must be " + std::to_string(count) + " numbers");
+            for (double x : v)
+                if (!std::isfinite(x)) throw py::value_error(where + key + " holds a value that is not finite");
+            return v;
+        };
+        for (const auto& [keyObject, value] : r.cast<py::dict>()) {
+            const std::string key = py::str(keyObject);
+            if (key == "centre" || key == "velocity" || key == "spin") {
+                const std::vector<double> v = numbers(key, value, 3);
+                (key == "centre" ? s.centre : key == "velocity" ? s.velocity : s.spin) = Vec3d(v[0], v[1], v[2]);
+            } else if (key == "orientation") {
+                const std::vector<double> q = numbers(key + " (a quaternion w, x, y, z)", value, 4);
+                const Eigen::Quaterniond turn(q[0], q[1], q[2], q[3]);
+                if (!(turn.norm() > 1e-12)) throw py::value_error(where + "orientation must be a nonzero quaternion w, x, y, z");
+                s.orientation = turn;
+            } else {
+                throw py::value_error(where + "unknown key \"" + key.substr(0, 40) +
+                                      "\" in its result; the keys are centre, orientation, velocity, spin");
+            }
+        }
+    }
     static py::dict bodyState(const RigidBodyState& s) {
         py::dict d;
         d["centre"] = triple(s.centre);
@@ -210,6 +235,24 @@ PYBIND11_MODULE(sparse_mpm, m) {
         "name: P (n, 3) float64, v (n, 3) float32, id, material, set (int32), and pscale, Cd, J, Jp, stress_norm, "
         "plastic_strain, F "
         "(n, 3, 3) where the file has them.");
+    m.def(
+        "read_bodies",
+        [](const std::string& path) {
+            const BodyPoints b = readVdbBodies(path);
+            py::dict d;
+            d["P"] = positions(b.x);
+            d["orient"] = table<float>(b.orient, {4}, [](const std::array<float, 4>& q, float* o) {
+                for (int a = 0; a < 4; ++a) o[a] = q[std::size_t(a)];
+            });
+            d["v"] = vectors(b.v);
+            d["w"] = vectors(b.w);
+            d["collider"] = scalars(b.collider);
+            return d;
+        },
+        py::arg("path"),
+        "The rigid bodies of a frame file (its grid \"bodies\", beside the points): a dict of numpy arrays, one row per "
+        "body: P (centre of mass), orient (x, y, z, w, Houdini's order: the turn from the scene's placement), v, w "
+        "(angular velocity) and collider (the body's index in the scene's colliders); empty arrays when it has none.");
     m.def(
         "read_frame_names",
         [](const std::string& path) {
@@ -260,9 +303,11 @@ PYBIND11_MODULE(sparse_mpm, m) {
         .def("set_body_driver", &PySimulation::setBodyDriver, py::arg("fn"),
              "Drives the rigid bodies from an outside solver: fn(body, dt, impulse, angular_impulse, state) is called for "
              "each body after every substep with the impulse and angular impulse (about the centre of mass) the material "
-             "gave it in that substep and its state (a dict as bodies() gives, moved to the pose the substep used, "
+             "gave it in that substep and its state (a dict of centre, orientation, velocity and spin, moved to the pose "
+             "the substep used, "
              "velocities as before); it returns the state the next substep starts from (a dict with any of centre, "
-             "orientation, velocity, spin) or None. It replaces gravity, the exchange and contact of the built-in solver; "
+             "orientation, velocity, spin: what it leaves out stays as it was; None leaves all). It replaces gravity, the "
+             "exchange and contact of the built-in solver; "
              "None instead of fn restores it.")
         .def_property_readonly("frame", &PySimulation::frame)
         .def_property_readonly("time", &PySimulation::time)

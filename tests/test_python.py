@@ -162,6 +162,46 @@ class SimulationTest(unittest.TestCase):
         outside.advance(1)
         np.testing.assert_allclose(outside.bodies()[0]["centre"], built.bodies()[0]["centre"], rtol=0, atol=1e-9)
 
+    def test_a_body_drivers_mistakes_are_named_errors(self):
+        scene = scene_file(self.dir, "drop.json", {
+            "simulation": {"frames": 2, "dx": 0.04},
+            "sets": [{"material": "water", "shape": {"type": "box", "min": [0, 0, 0], "max": [0.2, 0.1, 0.2]}}],
+            "colliders": [{"type": "plane"}, {"type": "sphere", "center": [0.1, 0.3, 0.1], "radius": 0.04,
+                                               "dynamic": {"density": 800}}]})
+        with self.assertRaises(TypeError) as caught:
+            sparse_mpm.Simulation(scene).set_body_driver(42)
+        self.assertIn("expected a function", str(caught.exception))
+        cases = [(lambda *a: {"velocty": [0, 0, 0]}, ValueError, 'unknown key "velocty"'),
+                 (lambda *a: [1, 2, 3], TypeError, "return a dict"),
+                 (lambda *a: {"velocity": "abc"}, TypeError, "velocity must be 3 numbers"),
+                 (lambda *a: {"velocity": [0, 1]}, ValueError, "velocity must be 3 numbers"),
+                 (lambda *a: {"spin": [0, float("nan"), 0]}, ValueError, "spin holds a value that is not finite"),
+                 (lambda *a: {"orientation": [0, 0, 0, 0]}, ValueError, "orientation must be a nonzero quaternion")]
+        for fn, kind, said in cases:
+            sim = sparse_mpm.Simulation(scene)
+            sim.set_body_driver(fn)
+            with self.assertRaises(kind) as caught:
+                sim.advance(1)
+            self.assertIn("body driver (body 0): " + said, str(caught.exception))
+
+    def test_read_bodies_gives_the_poses_of_bodies_csv(self):
+        scene = scene_file(self.dir, "spin.json", {
+            "simulation": {"frames": 2, "dx": 0.04},
+            "sets": [{"material": "water", "shape": {"type": "box", "min": [0, 0, 0], "max": [0.2, 0.1, 0.2]}}],
+            "colliders": [{"type": "plane"}, {"type": "box", "center": [0.1, 0.5, 0.1], "size": [0.1, 0.05, 0.1],
+                                               "dynamic": {"density": 600, "angular_velocity": [0, 3, 0]}}]})
+        out = sparse_mpm.run(scene, os.path.join(self.dir, "spin_out"), threads=2)
+        b = sparse_mpm.read_bodies(os.path.join(out, "spin_0002.vdb"))
+        with open(os.path.join(out, "bodies.csv")) as f:
+            row = [r for r in csv.DictReader(f) if r["frame"] == "2"][0]
+        self.assertEqual(b["collider"].tolist(), [1])
+        np.testing.assert_allclose(b["P"][0], [float(row[k]) for k in "xyz"], atol=1e-6)
+        np.testing.assert_allclose(b["orient"][0], [float(row[k]) for k in ("qx", "qy", "qz", "qw")], atol=1e-6)
+        np.testing.assert_allclose(b["w"][0], [float(row[k]) for k in ("wx", "wy", "wz")], atol=1e-6)
+        # Free flight about y at 3 rad/s: the turn is 3 t about y.
+        self.assertAlmostEqual(2 * math.atan2(b["orient"][0][1], b["orient"][0][3]), 3 * 2 / 24, places=5)
+        self.assertEqual(len(sparse_mpm.read_bodies(os.path.join(out, "spin_0001.vdb"))["collider"]), 1)
+
     def test_a_bad_scene_is_a_named_error(self):
         bad = scene_file(self.dir, "bad.json", {"sets": [{"material": "wter"}]})
         with self.assertRaises(ValueError) as caught:

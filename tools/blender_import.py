@@ -293,7 +293,7 @@ def keyframed_colliders(scene, first, last, root):
             if moving:
                 for path in ("location", "rotation_quaternion", "scale"):
                     obj.keyframe_insert(path, frame=f)
-        mat = rb.principled("collider_%d" % i, rb.COLLIDER_COLOUR, 0.6)
+        mat = rb.principled("collider_%d" % i, rb.BODY_COLOUR if c.get("dynamic") else rb.COLLIDER_COLOUR, 0.6)
         if c.get("inside"):
             rb.cutaway(mat, hide_front=True)
         obj.data.materials.clear()

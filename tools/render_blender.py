@@ -38,6 +38,9 @@ MATERIAL_COLOURS = {"water": (0.15, 0.4, 0.9), "jelly": (0.85, 0.2, 0.25), "rubb
                     "metal": (0.72, 0.74, 0.78), "viscous": (0.8, 0.45, 0.05)}
 PALETTE = [(0.2, 0.65, 0.35), (0.9, 0.6, 0.1), (0.3, 0.7, 0.8), (0.6, 0.6, 0.2)]
 COLLIDER_COLOUR = (0.42, 0.4, 0.38)
+# Rigid bodies (colliders with "dynamic") stand apart from the walls around them: drawn in the walls' grey, a box
+# in a tank vanished against the tank's far wall from a front view.
+BODY_COLOUR = (0.75, 0.42, 0.18)
 # A collider's drawn extent is clipped to the material's bounds grown by this many times their size, so a
 # drum 1 m long around a 4 cm slab of sand does not shrink the material to a speck.
 COLLIDER_FRAMING_MARGIN = 0.5
@@ -455,7 +458,8 @@ def add_colliders(scene, frame, root, material=None, towards=None):
     """Every bounded collider, posed at the frame's time. A container (`"inside": true`) is drawn with its faces
     towards the camera see-through; a collider around the material (its box holds the middle of `material`'s
     bounds: a glass, a bowl) is cut by the plane through that middle facing the camera (`towards`), so that the
-    near side of neither hides what it holds."""
+    near side of neither hides what it holds. A rigid body (`dynamic`) is never cut: it holds no material, it
+    floats or sinks in it."""
     out = []
     for i, c in enumerate(scene.colliders):
         made = collider_object(c, scene, frame, root)
@@ -466,12 +470,12 @@ def add_colliders(scene, frame, root, material=None, towards=None):
         if obj.parent is not root:
             adopt(obj, root)
         obj.matrix_basis = collider_matrix(scene, i, c, frame, rest) @ rest
-        mat = principled("collider_%d" % i, COLLIDER_COLOUR, 0.6)
+        mat = principled("collider_%d" % i, BODY_COLOUR if c.get("dynamic") else COLLIDER_COLOUR, 0.6)
         middle = (material[0] + material[1]) / 2 if material else None
         if c.get("inside"):
             cutaway(mat, hide_front=True)
             obj.visible_shadow = False  # a closed container would leave its inside in the dark
-        elif middle is not None and towards is not None and holds(world_bounds([obj]), middle):
+        elif middle is not None and towards is not None and not c.get("dynamic") and holds(world_bounds([obj]), middle):
             cut_towards(mat, middle, towards)
         obj.data.materials.clear()
         obj.data.materials.append(mat)
