@@ -123,6 +123,101 @@ int RigidBodyModel::touch(RigidBodyState& s, const std::vector<const Collider*>&
     return int(contacts.size());
 }
 
+double RigidBodyModel::extent() const {
+    double reach = 0.0;
+    for (std::size_t i = 0; i < contactPoints.size(); ++i)
+        reach = std::max(reach, (contactPoints[i] - restCentre).norm() + contactRadii[i]);
+    return reach;
+}
+
+int touchBodies(const RigidBodyModel& A, RigidBodyState& a, const Collider& colliderA, const RigidBodyModel& B, RigidBodyState& b,
+                const Collider& colliderB, double t, double dt) {
+    // What can meet within the step: the bounding spheres closer than the distance the two may close in dt.
+    const double closing =
+        2.0 * dt * (a.velocity.norm() + b.velocity.norm() + a.spin.norm() * A.extent() + b.spin.norm() * B.extent());
+    if ((a.centre - b.centre).norm() > A.extent() + B.extent() + closing) return 0;
+    struct Contact {
+        Vec3d ra, rb, n;  ///< from each centre to the contact point; the normal pointing from b to a
+        double depth;     ///< < 0: a gap the next step may close, no more
+        double normal = 0.0;
+        Vec3d tangential = Vec3d::Zero();
+    };
+    const auto mu = [](const Collider& c) {
+        return c.boundary() == Boundary::Sticky ? std::numeric_limits<double>::infinity() : double(c.friction());
+    };
+    const double friction = std::min(mu(colliderA), mu(colliderB));
+    std::vector<Contact> contacts;
+    // The samples of `from` against the shape of `into`; sign turns the normal so that it points from b to a.
+    const auto sample = [&](const RigidBodyModel& M, const RigidBodyState& s, const Collider& into, double sign) {
+        const Mat3d R = s.orientation.toRotationMatrix();
+        for (std::size_t i = 0; i < M.contactPoints.size(); ++i) {
+            const Vec3d p = s.centre + R * (M.contactPoints[i] - M.restCentre);
+            const double phi = into.signedDistance(p, t) - M.contactRadii[i];
+            if (!(phi < closing)) continue;
+            const Vec3d n = into.normal(p, t);
+            const Vec3d q = p - M.contactRadii[i] * n;
+            contacts.push_back(Contact{q - a.centre, q - b.centre, sign * n, -phi});
+        }
+    };
+    sample(A, a, colliderB, 1.0);
+    sample(B, b, colliderA, -1.0);
+    if (contacts.empty()) return 0;
+    // Locked axes take no impulse.
+    const Vec3d invMassA = A.moveFree / A.mass, invMassB = B.moveFree / B.mass;
+    const Mat3d turnA = A.turnFree.asDiagonal(), turnB = B.turnFree.asDiagonal();
+    const Mat3d invIA = turnA * A.worldInertia(a.orientation).inverse() * turnA;
+    const Mat3d invIB = turnB * B.worldInertia(b.orientation).inverse() * turnB;
+    // J acts on a at ra, -J on b at rb.
+    const auto push = [&](const Contact& c, const Vec3d& J) {
+        a.velocity += invMassA.cwiseProduct(J);
+        a.spin += invIA * c.ra.cross(J);
+        b.velocity -= invMassB.cwiseProduct(J);
+        b.spin -= invIB * c.rb.cross(J);
+    };
+    const auto inverseMass = [&](const Contact& c, const Vec3d& d) {
+        return d.dot(invMassA.cwiseProduct(d) + (invIA * c.ra.cross(d)).cross(c.ra)) +
+               d.dot(invMassB.cwiseProduct(d) + (invIB * c.rb.cross(d)).cross(c.rb));
+    };
+    const auto relative = [&](const Contact& c) {
+        return Vec3d(a.velocity + a.spin.cross(c.ra) - b.velocity - b.spin.cross(c.rb));
+    };
+    constexpr int kSweeps = 8;
+    for (int sweep = 0; sweep < kSweeps; ++sweep)
+        for (Contact& c : contacts) {
+            const double kn = inverseMass(c, c.n);
+            if (!(kn > 0.0)) continue;
+            const double allowed = c.depth < 0.0 ? c.depth / dt : 0.0;
+            const double normal = std::max(c.normal + (allowed - relative(c).dot(c.n)) / kn, 0.0);
+            push(c, (normal - c.normal) * c.n);
+            c.normal = normal;
+            Vec3d vt = relative(c);
+            vt -= vt.dot(c.n) * c.n;
+            const double speed = vt.norm();
+            if (!(speed > 0.0)) continue;
+            const Vec3d dir = vt / speed;
+            const double kt = inverseMass(c, dir);
+            if (!(kt > 0.0)) continue;
+            Vec3d tangential = c.tangential - (speed / kt) * dir;
+            const double limit = friction * c.normal;
+            if (tangential.norm() > limit) tangential *= limit / tangential.norm();
+            push(c, tangential - c.tangential);
+            c.tangential = tangential;
+        }
+    // Apart along the normals, what is left of each contact's depth, shared by the inverse masses along it.
+    Vec3d apart = Vec3d::Zero();
+    for (int sweep = 0; sweep < kSweeps; ++sweep)
+        for (const Contact& c : contacts) {
+            const double left = c.depth - apart.dot(c.n);
+            if (left > 0.0) apart += left * c.n;
+        }
+    const double ka = apart.dot(invMassA.cwiseProduct(apart)), kb = apart.dot(invMassB.cwiseProduct(apart));
+    if (ka + kb > 0.0) {
+        a.centre += (ka / (ka + kb)) * apart.cwiseProduct(A.moveFree);
+        b.centre -= (kb / (ka + kb)) * apart.cwiseProduct(B.moveFree);
+    }
+    return int(contacts.size());
+}
+
 double RigidBodyModel::energy(const RigidBodyState& s, const Vec3d& gravity, double dt) const {
     return 0.5 * mass * s.velocity.squaredNorm() + 0.5 * s.spin.dot(worldInertia(s.orientation) * s.spin) -
            mass * gravity.dot(s.centre) - 0.5 * dt * mass * gravity.dot(s.velocity);

@@ -18,7 +18,9 @@
 // or not at all) a body touches at sample points of its surface: inelastic contact with Coulomb friction by
 // sequential impulses (projected Gauss-Seidel over the contacts, a fixed number of sweeps in a fixed order, with
 // speculative contacts for points a step could carry in: Catto 2006, "Fast and Simple Physics using Sequential
-// Impulses"), then the body is moved out along the contacts' normals. Bodies do not touch each other yet.
+// Impulses"), then the body is moved out along the contacts' normals. Two bodies touch the same way, each one's
+// samples against the other's shape, with equal and opposite impulses (momentum kept) and the push out shared by
+// their inverse masses; the pairs are solved in collider order after the contacts with the fixed colliders.
 #include <array>
 #include <cmath>
 #include <vector>
@@ -65,6 +67,8 @@ struct RigidBodyModel {
     /// velocities change by the impulses of inelastic Coulomb contact (a point in a collider stops approaching it,
     /// one outside may close its gap in dt, no more), and the body moves out of them. Returns the contacts.
     int touch(RigidBodyState& s, const std::vector<const Collider*>& fixed, double t, double dt) const;
+    /// The farthest a point of the body reaches from its centre of mass (contact samples with their radii).
+    double extent() const;
     /// Kinetic plus gravitational energy (zero height at the origin, as the particles'), less dt M g . v / 2: the
     /// energy the scheme keeps in free flight over steps of dt.
     double energy(const RigidBodyState& s, const Vec3d& gravity, double dt) const;
@@ -78,6 +82,14 @@ struct RigidBodyModel {
     /// The world inertia tensor at an orientation.
     Mat3d worldInertia(const Eigen::Quaterniond& q) const;
 };
+
+/// Contact between bodies a and b at time t, at their states' poses, before a next step of about dt: a's samples
+/// against b's collider (its shape at b's pose) and b's against a's, inelastic with Coulomb friction (the smaller of
+/// the two colliders' coefficients; a sticky one counts as infinite), by sequential impulses equal and opposite on
+/// the two; then they are moved apart along the contacts' normals in the ratio of their inverse masses. The
+/// colliders must read the states' poses (their frames set from them). Returns the contacts.
+int touchBodies(const RigidBodyModel& A, RigidBodyState& a, const Collider& colliderA, const RigidBodyModel& B, RigidBodyState& b,
+                const Collider& colliderB, double t, double dt);
 
 /// The impulse and angular impulse a body's collider passes gave the material, summed exactly (core/ExactSum.h),
 /// so that the body moves the same on any number of threads and ranks.

@@ -152,7 +152,7 @@ TEST(Safety, ACtrlCInsideAFrameKeepsTheCheckpointWrittenAfterTheFrameBefore) {
     // The checkpoint of a run stopped inside frame N was stored under frame N-1's name, replacing the one written
     // after frame N-1. Now it is <scene>_checkpoint_NNNN_inside.mpmc beside it; --resume continues from it to the
     // uninterrupted run's bits, and it goes once a newer checkpoint is written. 60 substeps a frame make a frame
-    // last far longer than the 1 ms poll, so the stop lands inside frame 3.
+    // last far longer than the 1 ms poll.
     const std::string dir = tempDir("inside");
     std::string text = kScene;
     text.replace(text.find("\"substeps\": 4"), std::strlen("\"substeps\": 4"), "\"substeps\": 60");
@@ -161,9 +161,17 @@ TEST(Safety, ACtrlCInsideAFrameKeepsTheCheckpointWrittenAfterTheFrameBefore) {
     ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/ref", "--quiet"}, dir).code, 0);
     const std::string out = dir + "/out";
     Child c = start({"run", scene, "-o", out}, dir + "/child.log");
+    // Half a frame after frame 2's checkpoint (a frame lasts as long as the one between the first two checkpoints):
+    // past the check for a stop between frames, well inside frame 3.
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(3);
-    while (!fs::exists(out + "/flow_checkpoint_0002.mpmc") && std::chrono::steady_clock::now() < deadline)
-        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    const auto appears = [&](const char* name) {
+        while (!fs::exists(out + name) && std::chrono::steady_clock::now() < deadline)
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        return std::chrono::steady_clock::now();
+    };
+    const auto first = appears("/flow_checkpoint_0001.mpmc");
+    const auto frame = appears("/flow_checkpoint_0002.mpmc") - first;
+    std::this_thread::sleep_for(frame / 2);
     ::kill(c.pid, SIGINT);
     EXPECT_EQ(c.wait(), 130);
     const std::string said = c.output();
