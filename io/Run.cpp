@@ -564,6 +564,14 @@ void SceneRun::run(const std::atomic<int>* stop) {
             throw Interrupted();
         }
     }
+    // A stopped run's checkpoint inside a frame this run has since written is spent (without checkpoint_every no
+    // newer checkpoint replaced it): a later --resume would redo frames that are done.
+    onRoot(Comm::world(), [&] {
+        std::error_code ec;
+        for (const CheckpointFiles& c : listCheckpoints(dir_, scene_.name))
+            if (c.inside && c.frame < last_)
+                for (const std::string& p : c.all()) fs::remove(p, ec);
+    });
     reportRanks();
 }
 

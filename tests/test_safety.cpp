@@ -164,13 +164,13 @@ TEST(Safety, ACtrlCInsideAFrameKeepsTheCheckpointWrittenAfterTheFrameBefore) {
     // Half a frame after frame 2's checkpoint (a frame lasts as long as the one between the first two checkpoints):
     // past the check for a stop between frames, well inside frame 3.
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(3);
-    const auto appears = [&](const char* name) {
-        while (!fs::exists(out + name) && std::chrono::steady_clock::now() < deadline)
+    const auto appears = [&](const std::string& path) {
+        while (!fs::exists(path) && std::chrono::steady_clock::now() < deadline)
             std::this_thread::sleep_for(std::chrono::milliseconds(1));
         return std::chrono::steady_clock::now();
     };
-    const auto first = appears("/flow_checkpoint_0001.mpmc");
-    const auto frame = appears("/flow_checkpoint_0002.mpmc") - first;
+    const auto first = appears(out + "/flow_checkpoint_0001.mpmc");
+    const auto frame = appears(out + "/flow_checkpoint_0002.mpmc") - first;
     std::this_thread::sleep_for(frame / 2);
     ::kill(c.pid, SIGINT);
     EXPECT_EQ(c.wait(), 130);
@@ -190,6 +190,25 @@ TEST(Safety, ACtrlCInsideAFrameKeepsTheCheckpointWrittenAfterTheFrameBefore) {
     expectSameOutput(dir + "/ref", out, "flow", 10);
     EXPECT_FALSE(fs::exists(out + "/flow_checkpoint_0003_inside.mpmc"));  // superseded by frame 3's own
     EXPECT_TRUE(fs::exists(out + "/flow_checkpoint_0005.mpmc"));
+
+    // Without periodic checkpoints the stop's is the only one; once the resumed run has written the frames after it,
+    // it goes: a later --resume would redo them (there is nothing to resume from then, and it says so).
+    text.replace(text.find("\"output\": {"), std::strlen("\"output\": {"), "\"output\": { \"checkpoint_every\": 0,");
+    fs::create_directories(dir + "/bare");
+    const std::string bare = writeFile(dir + "/bare/flow.json", text), quiet = dir + "/bare/out";
+    Child d = start({"run", bare, "-o", quiet}, dir + "/child.log");
+    const auto firstFile = appears(quiet + "/flow_0001.ply");
+    std::this_thread::sleep_for((appears(quiet + "/flow_0002.ply") - firstFile) / 2);
+    ::kill(d.pid, SIGINT);
+    EXPECT_EQ(d.wait(), 130);
+    ASSERT_TRUE(fs::exists(quiet + "/flow_checkpoint_0003_inside.mpmc")) << d.output();
+    const Result finished = runMpm({"run", bare, "-o", quiet, "--resume"}, dir);
+    ASSERT_EQ(finished.code, 0) << finished.output;
+    expectSameOutput(dir + "/ref", quiet, "flow", 10);
+    EXPECT_FALSE(fs::exists(quiet + "/flow_checkpoint_0003_inside.mpmc"));
+    const Result again = runMpm({"run", bare, "-o", quiet, "--resume"}, dir);
+    EXPECT_EQ(again.code, 2) << again.output;
+    EXPECT_NE(again.output.find("no usable checkpoint"), std::string::npos) << again.output;
 }
 
 TEST(Safety, CtrlCDuringTheSetUpOfALargeSceneActsAtOnceAndTouchesNothing) {
