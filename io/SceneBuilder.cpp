@@ -656,6 +656,15 @@ void overlapWarnings(const SceneDesc& scene, const std::vector<std::vector<Vec3d
 
 std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
     std::vector<std::string> out;
+    // Explicit MPM is stable for CFL numbers below about 1 (the stability sweep's bound, docs/method.md section 8).
+    constexpr double kExplicitBound = 1.0;
+    if (scene.settings.adaptive && scene.settings.cfl > kExplicitBound) {
+        std::ostringstream s;
+        s << scene.file << ": /simulation/cfl: " << scene.settings.cfl
+          << " is past the explicit step's stability bound (about 1): the run is likely to stop with a blow-up (or, with "
+             "retries, to halve its step until it is stable); use 0.5, the default, or less";
+        out.push_back(s.str());
+    }
     std::vector<std::unique_ptr<Collider>> colliders;
     for (std::size_t c = 0; c < scene.colliders.size(); ++c) colliders.push_back(colliderOf(scene, c, nullptr, &out));
     std::vector<std::vector<Vec3d>> positions(scene.sets.size());

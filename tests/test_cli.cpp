@@ -144,6 +144,11 @@ TEST(Cli, UnstableRunIsCaughtNotWritten) {
     EXPECT_NE(r.output.find("simulation stopped"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("particle id"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out + "/blowup_0010.vdb"));
+    // Validate says so beforehand (a new user's cfl 5 validated without a word).
+    const Result checked = runMpm("validate " + scene);
+    EXPECT_NE(checked.output.find("warning: " + scene + ": /simulation/cfl: 5 is past the explicit step's stability bound"),
+              std::string::npos)
+        << checked.output;
 }
 
 TEST(Cli, UnstableFrameIsRetriedWithHalfTheStepWhenAsked) {
