@@ -1,6 +1,8 @@
 #include "core/Simulation.h"
-// The substep in the algorithm's order (P2G, grid update, G2P, particle pass, bodies), the step policy, emission,
-// checkpoint restore and diagnostics; what the ranks add lives in core/SimulationRanks.cpp.
+// The coordinator: a frame cut into substeps, the substep in the algorithm's order (bin, P2G, grid update, G2P,
+// particle pass, bodies, checks, emission), binning, restore and the frame's measurements. Beside it:
+// core/SimulationStep.cpp (the step policy), core/SimulationEmission.cpp (emission), core/SimulationColliders.cpp
+// (walls' contact test, rigid bodies) and core/SimulationRanks.cpp (what the ranks add).
 
 #include "sparse/LeafLookup.h"
 #include "sparse/LeafParallel.h"
@@ -39,19 +41,6 @@ void checkEnergy(SimState& state, const Bodies& bodies, const StabilityGuard& gu
     state.energy.scale = std::max(state.energy.scale, st.kineticEnergy + st.elasticEnergy + moving);
     guard.checkEnergy(state, st);
 }
-
-/// Adds the seconds since the last lap to a phase total.
-class PhaseClock {
-public:
-    void lap(double& total) {
-        const auto now = std::chrono::steady_clock::now();
-        total += std::chrono::duration<double>(now - last_).count();
-        last_ = now;
-    }
-
-private:
-    std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
 }  // namespace
 
 Simulation::Simulation(const SimulationSettings& settings)
@@ -65,116 +54,6 @@ Simulation::Simulation(const SimulationSettings& settings)
 float Simulation::kernelInertiaScale() const {
     return withKernel(settings_.transfer.interpolation, []<class K>() { return 1.0f / K::kInverseInertia; });
 }
-
-int Simulation::addSpecies(AnySpecies species, int body) {
-    if (body < 0) throw std::invalid_argument("addSpecies: body " + std::to_string(body) + " is negative");
-    const std::size_t field = settings_.contact == ContactModel::MultiField ? std::size_t(body) : 0;
-    while (fields_.size() <= field) {
-        fields_.emplace_back();
-        fields_.back().configure(fields_[0].geometry().dx, fields_[0].geometry().baseShift, fields_[0].geometry().width);
-        fieldSpecies_.emplace_back();
-    }
-    fieldSpecies_[field].push_back(int(state_.species.size()));
-    state_.species.push_back(std::move(species));
-    state_.bounds.minStiffnessKey.push_back(std::numeric_limits<float>::infinity());
-    destination_.emplace_back();
-    populated_.push_back(particlesOf(state_.species.back()).size() > 0);
-    return int(state_.species.size()) - 1;
-}
-
-void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
-                              const std::vector<Vec3f>& perParticle, const std::vector<float>& masses,
-                              const std::vector<float>& volumes) {
-    if ((!perParticle.empty() && perParticle.size() != x.size()) || (!masses.empty() && masses.size() != x.size()) ||
-        (!volumes.empty() && volumes.size() != x.size()))
-        throw std::logic_error("addParticles: one velocity, mass or volume per particle, or none");
-    float fastest = x.empty() ? 0.0f : v.norm();
-    for (const Vec3f& u : perParticle) fastest = std::max(fastest, (v + u).norm());
-    // Ids are given over all the particles, on every rank; each rank keeps those in the leaves it owns.
-    if (!x.empty()) populated_.at(std::size_t(s)) = 1;
-    std::vector<int32_t> ids(x.size());
-    for (int32_t& i : ids) i = state_.nextId++;
-    if (partitioned_ && comm_->distributed()) {
-        std::vector<std::size_t> keep;
-        for (std::size_t i = 0; i < x.size(); ++i)
-            if (ownerOf(particleLeaf(x[i])) == comm_->rank()) keep.push_back(i);
-        auto pick = [&](const auto& all) {
-            std::decay_t<decltype(all)> out;
-            if (all.empty()) return out;
-            for (std::size_t i : keep) out.push_back(all[i]);
-            return out;
-        };
-        const std::vector<Vec3d> kx = pick(x);
-        const std::vector<Vec3f> kv = pick(perParticle);
-        const std::vector<float> km = pick(masses), kvol = pick(volumes);
-        const std::vector<int32_t> kid = pick(ids);
-        appendParticles(s, kx, v, mass, volume, set, kv, km, kvol, kid);
-    } else {
-        appendParticles(s, x, v, mass, volume, set, perParticle, masses, volumes, ids);
-    }
-    state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, fastest);
-}
-
-void Simulation::emitPart(const Emitter& e) {
-    if (!comm_->distributed() && e.total != (long long)e.positions.size())
-        throw std::logic_error("emitPart: a part of a set is emitted on ranks only, after distribute()");
-    // What one process computes from the whole set: the fastest particle, whether the species has any.
-    float fastest = e.positions.empty() ? 0.0f : e.velocity.norm();
-    for (const Vec3f& u : e.velocities) fastest = std::max(fastest, (e.velocity + u).norm());
-    fastest = comm_->max(fastest);
-    if (e.total > 0) populated_.at(std::size_t(e.species)) = 1;
-    std::vector<int32_t> ids(e.positions.size());
-    for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = int32_t(state_.nextId + e.first + (long long)i);
-    state_.nextId += int32_t(e.total);
-    const std::size_t before = particlesOf(state_.species.at(std::size_t(e.species))).size();
-    appendParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes, ids);
-    setAffine(e, before);
-    state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, fastest);
-    if (partitioned_) sendEmittedToOwners(e.species, before);
-}
-
-void Simulation::setAffine(const Emitter& e, std::size_t from) {
-    // PIC keeps no affine velocity: its particles start without one, as they go on.
-    if (e.affine.isZero() || settings_.transfer.transfer != TransferScheme::APIC) return;
-    ParticleArrays& P = particlesOf(state_.species.at(std::size_t(e.species)));
-    std::fill(P.C.begin() + std::ptrdiff_t(from), P.C.end(), e.affine);
-}
-
-void Simulation::appendParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
-                                 const std::vector<Vec3f>& perParticle, const std::vector<float>& masses,
-                                 const std::vector<float>& volumes, const std::vector<int32_t>& ids) {
-    std::visit(
-        [&](auto& sp) {
-            using M = typename std::decay_t<decltype(sp)>::Material;
-            ParticleArrays& P = sp.p;
-            const std::size_t n0 = P.size(), n = x.size();
-            P.x.insert(P.x.end(), x.begin(), x.end());
-            P.v.resize(n0 + n, v);
-            for (std::size_t i = 0; i < perParticle.size(); ++i) P.v[n0 + i] += perParticle[i];
-            P.C.resize(n0 + n, Mat3f::Zero());
-            if (masses.empty())
-                P.mass.resize(n0 + n, mass);
-            else
-                P.mass.insert(P.mass.end(), masses.begin(), masses.end());
-            if (volumes.empty())
-                P.volume0.resize(n0 + n, volume);
-            else
-                P.volume0.insert(P.volume0.end(), volumes.begin(), volumes.end());
-            P.set.resize(n0 + n, set);
-            P.id.insert(P.id.end(), ids.begin(), ids.end());
-            // A model whose rest state depends on its parameters (sand's cone) takes them.
-            if constexpr (requires { sp.state.appendRest(n, sp.params); })
-                sp.state.appendRest(n, sp.params);
-            else
-                sp.state.appendRest(n);
-            float& key = state_.bounds.minStiffnessKey[s];
-            for (std::size_t i = n0; i < n0 + n; ++i) key = std::min(key, M::stiffnessKey(sp.state, i));
-        },
-        state_.species.at(s));
-    // A rank that kept none of them still takes their rest-state stiffness, as one process would.
-    comm_->min(state_.bounds.minStiffnessKey);
-}
-
 void Simulation::restore(SimState state, bool share) {
     if (state.streamFlow.size() != emitters_.size() || state.streamLayers.size() != emitters_.size())
         throw std::invalid_argument("restore: the state has " + std::to_string(state.streamFlow.size()) +
@@ -206,95 +85,6 @@ std::size_t Simulation::particleCount() const {
 }
 
 std::size_t Simulation::totalParticleCount() const { return std::size_t(comm_->sum((long long)particleCount())); }
-
-void Simulation::emitDue() {
-    return withSubnormalsFlushed([&] {
-        if (state_.emittedFrame == state_.frame) return;
-        state_.emittedFrame = state_.frame;
-        for (Emitter& e : emitters_) {
-            if (!e.emitsAt(state_.frame)) continue;
-            if (e.holdsPart()) {
-                emitPart(e);
-            } else {
-                const std::size_t before = particlesOf(state_.species.at(std::size_t(e.species))).size();
-                addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
-                setAffine(e, before);
-            }
-            // Emitted for the last time: its samples (24 bytes a particle and more, on every rank) are not needed again.
-            if (state_.frame == e.lastEmission()) {
-                std::vector<Vec3d>().swap(e.positions);
-                std::vector<Vec3f>().swap(e.velocities);
-                std::vector<float>().swap(e.masses);
-                std::vector<float>().swap(e.volumes);
-                e.released = true;
-            }
-        }
-    });
-}
-
-double Simulation::cflTimeStep() const {
-    if (!settings_.adaptive) return std::numeric_limits<double>::infinity();
-    float c = 0.0f;
-    for (std::size_t s = 0; s < state_.species.size(); ++s) {
-        if (!populated_[s]) continue;
-        c = std::max(c, std::visit(
-                            [&](const auto& sp) {
-                                using M = typename std::decay_t<decltype(sp)>::Material;
-                                return M::waveSpeed(sp.params, state_.bounds.minStiffnessKey[s]);
-                            },
-                            state_.species[s]));
-    }
-    // dt (c + |v| + |g| dt) = C dx: the speed bound is the one at the end of the step, so that gravity
-    // cannot carry a very soft or resting body more than C dx in one step (c + |v| near 0 would allow any
-    // dt). Solved without cancellation; it is C dx / (c + |v|) when g = 0.
-    const double speed = double(c) + double(state_.bounds.maxSpeed), g = settings_.gravity.norm(),
-                 reach = settings_.cfl * settings_.dx;
-    const double denominator = speed + std::sqrt(speed * speed + 4.0 * g * reach);
-    return denominator > 0.0 ? 2.0 * reach / denominator : std::numeric_limits<double>::infinity();
-}
-
-double Simulation::displacementTimeStep() const {
-    const double speed = double(state_.bounds.maxSpeed);
-    return settings_.maxDisplacement > 0.0 && speed > 0.0 ? settings_.maxDisplacement * settings_.dx / speed
-                                                          : std::numeric_limits<double>::infinity();
-}
-
-Simulation::StepBound Simulation::stepBound(bool withCause) const {
-    const double target = settings_.targetDt(), cfl = cflTimeStep() * guard_.stepScale();
-    const double displacement = displacementTimeStep() * guard_.stepScale();
-    const std::string retry = guard_.stepScale() < 1.0 ? " (retry)" : "";
-    if (displacement < std::min(target, cfl)) {
-        if (!withCause) return {displacement, "", "max_displacement" + retry};
-        std::ostringstream cause;
-        cause << "the displacement rule, simulation.max_displacement = " << settings_.maxDisplacement
-              << " cells a substep at the fastest particle's |v| = " << state_.bounds.maxSpeed << " m/s";
-        return {displacement, cause.str(), "max_displacement" + retry};
-    }
-    if (target <= cfl) return {target, withCause ? "the target step 1 / (fps * substeps)" : "", "target" + retry};
-    // The fastest wave of the species present, against the fastest particle.
-    float c = 0.0f;
-    std::string stiffest;
-    for (std::size_t s = 0; s < state_.species.size(); ++s)
-        std::visit(
-            [&](const auto& sp) {
-                using M = typename std::decay_t<decltype(sp)>::Material;
-                const float w = populated_[s] ? M::waveSpeed(sp.params, state_.bounds.minStiffnessKey[s]) : 0.0f;
-                if (w > c) c = w, stiffest = sp.name;
-            },
-            state_.species[s]);
-    const bool wave = c >= state_.bounds.maxSpeed;
-    const std::string limit = (wave ? "cfl_wave_speed " + stiffest : std::string("cfl_particle_speed")) + retry;
-    if (!withCause) return {cfl, "", limit};
-    std::ostringstream cause;
-    cause << "the CFL bound, C dx / (c + |v|max + |g| dt) with ";
-    if (wave)
-        cause << "the wave speed c = " << c << " m/s of set " << stiffest;
-    else
-        cause << "the fastest particle, |v| = " << state_.bounds.maxSpeed << " m/s";
-    if (guard_.stepScale() < 1.0) cause << ", shortened " << 1.0 / guard_.stepScale() << "x for a retry";
-    return {cfl, cause.str(), limit};
-}
-
 void Simulation::checkCoordinates() const {
     const double limit = kMaxGridCoordinate * settings_.dx;
     for (std::size_t s = 0; s < state_.species.size(); ++s) {
@@ -341,15 +131,6 @@ void Simulation::setVelocities(const std::vector<Vec3f>& v) {
     state_.energy.work += added;
     refreshSpeedBound();
 }
-
-void Simulation::refreshSpeedBound() {
-    float& vmax = state_.bounds.maxSpeed;
-    vmax = 0.0f;
-    for (const AnySpecies& s : state_.species)
-        for (const Vec3f& v : particlesOf(s).v) vmax = std::max(vmax, v.norm());
-    vmax = comm_->max(vmax);
-}
-
 template <class S>
 void Simulation::permute(S& sp, const std::vector<uint32_t>& dest) {
     // One byte buffer, sized once for the widest attribute, serves every array in turn: a scratch array
@@ -397,13 +178,12 @@ void Simulation::withField(std::size_t f, Fn&& fn) {
 }
 
 void Simulation::bin() {
-    PhaseClock clock;
     const bool ranks = partitioned_ && comm_->distributed();
-    if (ranks) {
-        rebalanceIfNeeded();
-        migrateParticles();
-        clock.lap(phases_.communication);
-    }
+    if (ranks)
+        communicating([&] {
+            rebalanceIfNeeded();
+            migrateParticles();
+        });
     rankLeaves_.resize(fields_.size());
     for (std::size_t f = 0; f < fields_.size(); ++f)
         withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
@@ -413,215 +193,30 @@ void Simulation::bin() {
                 std::vector<uint32_t>& dest = destination_[fields_.size() == 1 ? s : std::size_t(members[s])];
                 std::visit([&](auto& sp) { requests[s] = BinRequest{&sp.p.x, &sp.p.id, &dest, &sp.leafStart}; }, species[s]);
             }
-            grid.collectLeaves(requests);
-            RankLeaves& rl = rankLeaves_[f];
-            if (ranks) exchangeReachedLeaves(grid, rl);
-            grid.allocateLeaves();
-            if (ranks) {
-                // Which leaves are whose, and the ghost leaves each side of every rank pair, in leaf order.
-                rl.owned.assign(grid.leafCount(), 0);
-                for (auto& g : rl.ghostsFrom) g.clear();
-                rl.ghostsFrom.resize(std::size_t(comm_->size()));
-                for (std::size_t l = 0; l < grid.leafCount(); ++l) {
-                    const int owner = ownerOf(leafOfNode(grid.leaf(l).origin));
-                    if (owner == comm_->rank())
-                        rl.owned[l] = 1;
-                    else
-                        rl.ghostsFrom[std::size_t(owner)].push_back(uint32_t(l));
+            timed(phases_.topology, [&] {
+                grid.collectLeaves(requests);
+                RankLeaves& rl = rankLeaves_[f];
+                if (ranks) exchangeReachedLeaves(grid, rl);
+                grid.allocateLeaves();
+                if (ranks) ownLeaves(grid, rl);
+            });
+            timed(phases_.binning, [&] {
+                grid.sortParticles(requests);
+                for (std::size_t s = 0; s < species.size(); ++s) {
+                    const std::vector<uint32_t>& dest = *requests[s].destination;
+                    // Particles rarely change leaf between substeps: skip the permutation when it is the identity.
+                    const bool identity = tbb::parallel_reduce(
+                        tbb::blocked_range<std::size_t>(0, dest.size(), kPermuteGrain), true,
+                        [&](const auto& r, bool ok) {
+                            for (std::size_t i = r.begin(); ok && i < r.end(); ++i) ok = dest[i] == i;
+                            return ok;
+                        },
+                        [](bool a, bool b) { return a && b; });
+                    if (!identity) std::visit([&](auto& sp) { permute(sp, dest); }, species[s]);
                 }
-                rl.ghostsFor.assign(std::size_t(comm_->size()), {});
-                for (std::size_t r = 0; r < rl.ghostCoordsFor.size(); ++r)
-                    for (const Vec3i& c : rl.ghostCoordsFor[r]) rl.ghostsFor[r].push_back(grid.indexOfLeaf(c));
-            }
-            clock.lap(phases_.topology);
-            grid.sortParticles(requests);
-            for (std::size_t s = 0; s < species.size(); ++s) {
-                const std::vector<uint32_t>& dest = *requests[s].destination;
-                // Particles rarely change leaf between substeps: skip the permutation when it is the identity.
-                const bool identity = tbb::parallel_reduce(
-                    tbb::blocked_range<std::size_t>(0, dest.size(), kPermuteGrain), true,
-                    [&](const auto& r, bool ok) {
-                        for (std::size_t i = r.begin(); ok && i < r.end(); ++i) ok = dest[i] == i;
-                        return ok;
-                    },
-                    [](bool a, bool b) { return a && b; });
-                if (!identity) std::visit([&](auto& sp) { permute(sp, dest); }, species[s]);
-            }
-            clock.lap(phases_.binning);
+            });
         });
 }
-
-SurfaceContact Simulation::surfaceContact(std::size_t field) {
-    SurfaceContact s;
-    if (settings_.wallContact != WallContact::Surface) return s;
-    bool unilateral = false;
-    for (const auto& c : colliders_) unilateral = unilateral || c->boundary() == Boundary::Separate;
-    if (!unilateral) return s;
-    // The material's rest density, mass over rest volume over all particles (exact for one material), and whether
-    // the species differ in it; both change only when particles are added (nextId moves, on every rank alike).
-    if (state_.nextId != restDensityVersion_) {
-        ExactSum mass, volume;
-        std::vector<double> densities;
-        for (const AnySpecies& sp : state_.species) {
-            const ParticleArrays& P = particlesOf(sp);
-            ExactSum m, v;
-            for (std::size_t i = 0; i < P.size(); ++i) {
-                mass += double(P.mass[i]), volume += double(P.volume0[i]);
-                m += double(P.mass[i]), v += double(P.volume0[i]);
-            }
-            comm_->sum(m);
-            comm_->sum(v);
-            if (v.value() > 0.0) densities.push_back(m.value() / v.value());
-        }
-        comm_->sum(mass);
-        comm_->sum(volume);
-        restDensity_ = volume.value() > 0.0 ? mass.value() / volume.value() : 0.0;
-        const auto [lo, hi] = std::minmax_element(densities.begin(), densities.end());
-        // Equal to a part in a million: sets of one material, whose particle masses are rounded to float.
-        constexpr double kSameDensity = 1e-6;
-        densitiesDiffer_ = !densities.empty() && *hi > *lo * (1.0 + kSameDensity);
-        restDensityVersion_ = state_.nextId;
-    }
-    if (!(restDensity_ > 0.0)) return s;
-    const double cell = std::pow(settings_.dx, 3);
-    s.cellMass = float(restDensity_ * cell);
-    withKernel(settings_.transfer.interpolation, [&]<class K>() { s.covered = &K::covered; });
-    if (!densitiesDiffer_) return s;
-    // Bodies of different densities: a leaf's nodes take their mass from the particles binned in it and in the 7
-    // leaves below it (stencils spill towards +x, +y, +z), so its density is theirs: mass over rest volume. A leaf
-    // none of them holds particles for takes the scene's.
-    const SparseGrid& grid = fields_[field];
-    const std::vector<int>& members = fieldSpecies_[field];
-    const std::vector<uint32_t>& leaves = grid.particleLeaves();
-    struct Sums {
-        double mass = 0.0, volume = 0.0;
-    };
-    std::vector<Sums> own(leaves.size());
-    forEachLeafRange(leaves.size(), LeafGrain::Particles, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) {
-            const uint32_t l = leaves[i];
-            for (int k : members)
-                std::visit(
-                    [&](const auto& sp) {
-                        for (uint32_t p = sp.leafStart[l]; p < sp.leafStart[l + 1]; ++p)
-                            own[i].mass += double(sp.p.mass[p]), own[i].volume += double(sp.p.volume0[p]);
-                    },
-                    state_.species[std::size_t(k)]);
-        }
-    });
-    // On ranks the leaves below a leaf may hold their particles on other ranks: each rank sends its leaves' sums to
-    // the owners of the leaves above them, which add them in the order one process does.
-    std::vector<std::array<Sums, kNeighbours>> remote;
-    if (partitioned_ && comm_->distributed()) {
-        remote.assign(grid.leafCount(), {});
-        std::vector<Bytes> send(static_cast<std::size_t>(comm_->size()));
-        for (std::size_t i = 0; i < leaves.size(); ++i) {
-            const Vec3i from = leafOfNode(grid.leaf(leaves[i]).origin);
-            for (int d = 1; d < kNeighbours; ++d) {
-                const Vec3i to = from + Vec3i(neighbourStep(d, 0), neighbourStep(d, 1), neighbourStep(d, 2));
-                const int owner = ownerOf(to);
-                if (owner == comm_->rank()) continue;
-                Bytes& b = send[std::size_t(owner)];
-                putArray(b, to.data(), 3);
-                put(b, int32_t(d));
-                put(b, own[i].mass);
-                put(b, own[i].volume);
-            }
-        }
-        for (const Bytes& b : comm_->exchange(send)) {
-            ByteReader r{b};
-            while (!r.done()) {
-                Vec3i to;
-                r.getArray(to.data(), 3);
-                const int d = r.get<int32_t>();
-                Sums sums;
-                sums.mass = r.get<double>();
-                sums.volume = r.get<double>();
-                const uint32_t l = grid.indexOfLeaf(to);
-                if (l != SparseGrid::kNoLeaf) remote[l][std::size_t(d)] = sums;
-            }
-        }
-    }
-    std::vector<float>& cellMass = leafCellMass_[field];
-    cellMass.assign(grid.leafCount(), s.cellMass);
-    forEachLeafRange(grid.leafCount(), LeafGrain::Nodes, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t l = begin; l < end; ++l) {
-            double mass = 0.0, volume = 0.0;
-            for (int d = 0; d < kNeighbours; ++d) {
-                const uint32_t source = grid.sources(l)[std::size_t(d)];
-                const Sums& sums = source != SparseGrid::kNoLeaf ? own[source]
-                                   : remote.empty()              ? Sums{}
-                                                                 : remote[l][std::size_t(d)];
-                mass += sums.mass, volume += sums.volume;
-            }
-            if (volume > 0.0) cellMass[l] = float(mass / volume * cell);
-        }
-    });
-    s.leafCellMass = cellMass.data();
-    return s;
-}
-
-void Simulation::addBody(std::unique_ptr<Collider> c, const RigidBodyModel& model, std::shared_ptr<BodyFrame> frame,
-                         const RigidBodyState& initial) {
-    bodies_.push_back(Body{colliders_.size(), model, std::move(frame)});
-    colliders_.push_back(std::move(c));
-    state_.bodies.push_back(initial);
-    *bodies_.back().frame = model.frame(initial);
-}
-
-void Simulation::poseBodies(double dt) {
-    for (std::size_t k = 0; k < bodies_.size(); ++k)
-        *bodies_[k].frame = bodies_[k].model.frame(bodies_[k].model.moved(state_.bodies[k], dt));
-}
-
-float Simulation::moveBodies(double dt, const std::vector<BodyImpulse>& nodes, const std::vector<BodyImpulse>& particles) {
-    float fastest = 0.0f;
-    if (bodies_.empty()) return fastest;
-    std::vector<const Collider*> fixed;
-    for (const auto& c : colliders_)
-        if (!c->dynamic()) fixed.push_back(c.get());
-    for (std::size_t k = 0; k < bodies_.size(); ++k) {
-        const Body& b = bodies_[k];
-        BodyImpulse taken;
-        if (!nodes.empty()) taken += nodes[b.collider];
-        if (!particles.empty()) taken += particles[b.collider];
-        if (comm_->distributed())
-            for (ExactSum& e : taken.sum) comm_->sum(e);
-        RigidBodyState& s = state_.bodies[k];
-        const double before = b.model.energy(s, settings_.gravity, dt);
-        RigidBodyState next = b.model.moved(s, dt);
-        if (bodyDriver_) {
-            bodyDriver_(k, dt, -taken.impulse(), -taken.angular(), next);
-            next.orientation.normalize();
-        } else {
-            b.model.accelerate(s, next, dt, settings_.gravity, taken.impulse(), taken.angular());
-            b.model.touch(next, fixed, state_.time + dt, dt);
-        }
-        s = next;
-        // The bodies belong to the checked system: what they lose, the material may gain.
-        state_.energy.work -= b.model.energy(s, settings_.gravity, dt) - before;
-        *b.frame = b.model.frame(s);
-    }
-    // Bodies against bodies, pair by pair in collider order (the built-in solver only: a driver moves its own).
-    if (!bodyDriver_)
-        for (std::size_t i = 0; i < bodies_.size(); ++i)
-            for (std::size_t j = i + 1; j < bodies_.size(); ++j) {
-                const Body &a = bodies_[i], &b = bodies_[j];
-                RigidBodyState &sa = state_.bodies[i], &sb = state_.bodies[j];
-                const double before = a.model.energy(sa, settings_.gravity, dt) + b.model.energy(sb, settings_.gravity, dt);
-                if (touchBodies(a.model, sa, *colliders_[a.collider], b.model, sb, *colliders_[b.collider], state_.time + dt,
-                                dt) == 0)
-                    continue;
-                state_.energy.work -=
-                    a.model.energy(sa, settings_.gravity, dt) + b.model.energy(sb, settings_.gravity, dt) - before;
-                *a.frame = a.model.frame(sa);
-                *b.frame = b.model.frame(sb);
-            }
-    for (std::size_t k = 0; k < bodies_.size(); ++k)
-        fastest = std::max(fastest, float(bodies_[k].model.fastestPoint(state_.bodies[k])));
-    return fastest;
-}
-
 GridUpdateResult Simulation::updateGrid(float dt) {
     poseBodies(double(dt));
     for (const auto& c : colliders_) c->prepare(state_.time + dt);
@@ -633,8 +228,6 @@ GridUpdateResult Simulation::updateGrid(float dt) {
     const auto owned = [&](std::size_t f) { return ranks ? &rankLeaves_[f].owned : nullptr; };
     // On ranks, the passes that read other leaves' nodes (contact normals, mirror images) read those other
     // ranks own from their owners.
-    PhaseClock clock;
-    double computing = 0.0;  // the caller books this phase's time less its communication as grid
     const auto local = [&](const Vec3i& node) { return ownerOf(leafOfNode(node)) == comm_->rank(); };
     // The remote reads of the mirror passes, field by field.
     const auto remoteNodes = [&](std::size_t f) {
@@ -643,9 +236,7 @@ GridUpdateResult Simulation::updateGrid(float dt) {
             remote.owned = owned(f);
             remote.local = local;
             remote.fetch = [&, f](const std::vector<Vec3i>& nodes, std::vector<float>& m, std::vector<Vec3f>& v) {
-                clock.lap(computing);
-                fetchNodes(fields_[f], nodes, m, v);
-                clock.lap(phases_.communication);
+                communicating([&] { fetchNodes(fields_[f], nodes, m, v); });
             };
         }
         return remote;
@@ -670,10 +261,8 @@ GridUpdateResult Simulation::updateGrid(float dt) {
             for (std::size_t f = 0; f < fields_.size(); ++f) remote.owned.push_back(owned(f));
             remote.local = local;
             remote.fetch = [&](std::size_t f, const std::vector<Vec3i>& nodes, std::vector<float>& m) {
-                clock.lap(computing);
                 std::vector<Vec3f> unused;
-                fetchNodes(fields_[f], nodes, m, unused);
-                clock.lap(phases_.communication);
+                communicating([&] { fetchNodes(fields_[f], nodes, m, unused); });
             };
         }
         resolveFieldContact(fields_, settings_.contactFriction, ranks ? &remote : nullptr);
@@ -689,90 +278,29 @@ GridUpdateResult Simulation::updateGrid(float dt) {
         const RemoteNodes remote = remoteNodes(f);
         mirrorGhostNodes(fields_[f], walls[f], dt, ranks ? &remote : nullptr);
     }
-    if (ranks) {
-        // The mirrored nodes go to their holders with the other ghost velocities.
-        clock.lap(computing);
-        out.maxSpeed = comm_->max(out.maxSpeed);
-        comm_->sum(out.work);
-        for (std::size_t f = 0; f < fields_.size(); ++f) sendGhostVelocities(fields_[f], rankLeaves_[f]);
-        clock.lap(phases_.communication);
-    }
+    // The mirrored nodes go to their holders with the other ghost velocities.
+    if (ranks)
+        communicating([&] {
+            out.maxSpeed = comm_->max(out.maxSpeed);
+            comm_->sum(out.work);
+            for (std::size_t f = 0; f < fields_.size(); ++f) sendGhostVelocities(fields_[f], rankLeaves_[f]);
+        });
     return out;
 }
 
-void Simulation::scatter(float dt) {
-    if (partitioned_ && comm_->distributed()) {
-        // Halo parts for ghost leaves go to their owners; the owners' leaves add every part in order d. Field by
-        // field (a leaf coordinate has one owner in every field).
-        for (std::size_t f = 0; f < fields_.size(); ++f) {
-            RankLeaves& rl = rankLeaves_[f];
-            RemoteHalos remote;
-            remote.owned = &rl.owned;
-            remote.exchange = [&](HaloParts&& out) {
-                PhaseClock clock;
-                std::vector<Bytes> send(static_cast<std::size_t>(comm_->size()));
-                for (const HaloParts::Part& part : out.parts) {
-                    Bytes& b = send[std::size_t(ownerOf(part.leaf))];
-                    for (int a = 0; a < 3; ++a) put(b, int32_t(part.leaf[a]));
-                    put(b, part.d);
-                    putArray(b, part.lo, 3);
-                    putArray(b, part.hi, 3);
-                    std::size_t n = 1;
-                    for (int a = 0; a < 3; ++a) n *= std::size_t(part.hi[a] - part.lo[a]);
-                    put(b, uint64_t(n));
-                    putArray(b, out.data.data() + 4 * part.offset, 4 * n);
-                }
-                const std::vector<Bytes> received = comm_->exchange(send);
-                HaloParts in;
-                // What each rank's stencils read of a ghost leaf is what its parts wrote there: the velocities go
-                // back for that box alone, not for all the owner wrote.
-                rl.ghostBoxFor.assign(received.size(), {});
-                for (std::size_t from = 0; from < received.size(); ++from) {
-                    const Bytes& b = received[from];
-                    const std::vector<Vec3i>& coords = rl.ghostCoordsFor[from];
-                    rl.ghostBoxFor[from].assign(coords.size(), NodeBox{});
-                    ByteReader r{b};
-                    while (!r.done()) {
-                        HaloParts::Part part;
-                        for (int a = 0; a < 3; ++a) part.leaf[a] = r.get<int32_t>();
-                        part.d = r.get<int32_t>();
-                        r.getArray(part.lo, 3);
-                        r.getArray(part.hi, 3);
-                        const auto at = std::lower_bound(coords.begin(), coords.end(), part.leaf, mortonLess);
-                        if (at != coords.end() && *at == part.leaf) {
-                            NodeBox box;
-                            for (int a = 0; a < 3; ++a) {
-                                const int shift = kLeafDim * neighbourStep(part.d, a);
-                                box.lo[a] = int8_t(part.lo[a] - shift);
-                                box.hi[a] = int8_t(part.hi[a] - shift);
-                            }
-                            rl.ghostBoxFor[from][std::size_t(at - coords.begin())].add(box);
-                        }
-                        const std::size_t n = r.get<uint64_t>();
-                        part.offset = in.data.size() / 4;
-                        in.data.resize(in.data.size() + 4 * n);
-                        r.getArray(in.data.data() + 4 * part.offset, 4 * n);
-                        in.parts.push_back(part);
-                    }
-                }
-                clock.lap(phases_.communication);
-                return in;
-            };
-            withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
-                particlesToGrid(grid, species, settings_.transfer, dt, &remote);
-            });
-        }
-        return;
-    }
+void Simulation::particlesToGrid(float dt) {
+    // On ranks, halo parts for ghost leaves go to their owners; the owners' leaves add every part in order d.
+    const bool ranks = partitioned_ && comm_->distributed();
     for (std::size_t f = 0; f < fields_.size(); ++f)
         withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
-            particlesToGrid(grid, species, settings_.transfer, dt);
+            const RemoteHalos remote = ranks ? remoteHalos(f) : RemoteHalos{};
+            mpm::particlesToGrid(grid, species, settings_.transfer, dt, ranks ? &remote : nullptr);
         });
 }
 
-G2PSummary Simulation::gather(float dt) {
+G2PSummary Simulation::gridToParticles(float dt) {
     if (fields_.size() == 1) {
-        G2PSummary g2p = gridToParticles(fields_[0], state_.species, settings_.transfer, dt);
+        G2PSummary g2p = mpm::gridToParticles(fields_[0], state_.species, settings_.transfer, dt);
         reduceSummary(g2p);
         return g2p;
     }
@@ -781,7 +309,7 @@ G2PSummary Simulation::gather(float dt) {
     out.minStiffnessKey.assign(state_.species.size(), std::numeric_limits<float>::infinity());
     for (std::size_t f = 0; f < fields_.size(); ++f)
         withField(f, [&](SparseGrid& grid, std::vector<AnySpecies>& species) {
-            const G2PSummary r = gridToParticles(grid, species, settings_.transfer, dt);
+            const G2PSummary r = mpm::gridToParticles(grid, species, settings_.transfer, dt);
             const std::vector<int>& members = fieldSpecies_[f];
             out.maxSpeed = std::max(out.maxSpeed, r.maxSpeed);
             for (std::size_t s = 0; s < members.size(); ++s) out.minStiffnessKey[members[s]] = r.minStiffnessKey[s];
@@ -817,82 +345,43 @@ double Simulation::substep(double dtMax) {
     return withSubnormalsFlushed([&] {
         // Bin particles by leaf; allocate the leaves their stencils reach and release the others.
         bin();
-        PhaseClock clock;
         // Time step: the caller's bound (target and frame end), and the CFL condition (halved on retries).
         double dt = std::min(dtMax, cflTimeStep() * guard_.stepScale());
-        // On ranks a phase books its exchanges as communication itself; the phase keeps the rest of its time.
-        const auto lap = [&](double& phase, double communicationBefore) {
-            clock.lap(phase);
-            phase -= phases_.communication - communicationBefore;
-        };
         // P2G: mass and momentum, with the stress impulse of this step folded in (thesis 3.14, 3.15, 3.24).
-        double before = phases_.communication;
-        scatter(float(dt));
-        lap(phases_.p2g, before);
+        timed(phases_.p2g, [&] { particlesToGrid(float(dt)); });
         // Grid update: v = mv/m, gravity, colliders and friction (3.20, 3.26, section 5).
-        before = phases_.communication;
-        GridUpdateResult gridUpdate = updateGrid(float(dt));
-        lap(phases_.grid, before);
+        GridUpdateResult grid = timed(phases_.grid, [&] { return updateGrid(float(dt)); });
         // Thesis pseudocode 3: if a node would move more than maxDisplacement cells, redo with a shorter step.
-        if (settings_.maxDisplacement > 0.0 && gridUpdate.maxSpeed * dt > settings_.maxDisplacement * settings_.dx) {
-            dt = settings_.maxDisplacement * settings_.dx / gridUpdate.maxSpeed;
-            before = phases_.communication;
-            scatter(float(dt));
-            lap(phases_.p2g, before);
-            before = phases_.communication;
-            gridUpdate = updateGrid(float(dt));
-            lap(phases_.grid, before);
+        if (settings_.maxDisplacement > 0.0 && grid.maxSpeed * dt > settings_.maxDisplacement * settings_.dx) {
+            dt = settings_.maxDisplacement * settings_.dx / grid.maxSpeed;
+            timed(phases_.p2g, [&] { particlesToGrid(float(dt)); });
+            grid = timed(phases_.grid, [&] { return updateGrid(float(dt)); });
         }
         // G2P: velocity, affine velocity, deformation update with return mapping, advection (3.17-3.19, 3.21).
-        const G2PSummary g2p = gather(float(dt));
-        // Particles found inside a collider (walls thinner than a cell included) go back to its surface.
-        const ProjectionSummary held = holdOutOfColliders(float(dt));
-        clock.lap(phases_.g2p);
-        // Work moving colliders did is external: the energy check counts it.
-        ExactSum work = gridUpdate.work;
-        work += held.work;
-        state_.energy.work += work.value();
-        // Bodies the material moves take what it gained from them (the step the transfers took, in float).
-        const float bodySpeed = moveBodies(double(float(dt)), gridUpdate.bodies, held.bodies);
-        // The bounds the next step starts from, then the blow-up checks: a non-finite value, a particle that
-        // outran its stencil, a CFL step that collapsed.
-        const double cflBefore = cflTimeStep();
-        state_.bounds = StepBounds{std::max({g2p.maxSpeed, held.maxSpeed, bodySpeed}), g2p.minStiffnessKey};
-        guard_.checkSubstep(state_, g2p, dt, settings_.dx, cflBefore, cflTimeStep());
-        emitStreams(state_.time, state_.time + dt);
-        state_.time += dt;
-        ++state_.substeps;
-        clock.lap(phases_.other);
+        const G2PSummary g2p = timed(phases_.g2p, [&] { return gridToParticles(float(dt)); });
+        // The particle pass: particles found inside a collider (walls thinner than a cell included) go back to its
+        // surface.
+        const ProjectionSummary held = timed(phases_.g2p, [&] { return holdOutOfColliders(float(dt)); });
+        timed(phases_.other, [&] {
+            // Work moving colliders did is external: the energy check counts it.
+            ExactSum work = grid.work;
+            work += held.work;
+            state_.energy.work += work.value();
+            // Bodies the material moves take what it gained from them (the step the transfers took, in float).
+            const float bodySpeed = moveBodies(double(float(dt)), grid.bodies, held.bodies);
+            // The bounds the next step starts from, then the blow-up checks: a non-finite value, a particle that
+            // outran its stencil, a CFL step that collapsed.
+            const double cflBefore = cflTimeStep();
+            state_.bounds = StepBounds{std::max({g2p.maxSpeed, held.maxSpeed, bodySpeed}), g2p.minStiffnessKey};
+            guard_.checkSubstep(state_, g2p, dt, settings_.dx, cflBefore, cflTimeStep());
+            // Streams emit the particles that entered during the step.
+            emitStreams(state_.time, state_.time + dt);
+            state_.time += dt;
+            ++state_.substeps;
+        });
         return dt;
     });
 }
-
-void Simulation::emitStreams(double t0, double t1) {
-    for (std::size_t k = 0; k < emitters_.size(); ++k) {
-        const Emitter& e = emitters_[k];
-        if (!e.continuous) continue;
-        // The part of the substep during which the source runs.
-        const double open = double(e.startFrame) / settings_.fps, close = double(e.startFrame + e.durationFrames) / settings_.fps;
-        const double during = std::min(t1, close) - std::max(t0, open);
-        if (!(during > 0.0)) continue;
-        double& flow = state_.streamFlow[k];
-        int64_t& layers = state_.streamLayers[k];
-        flow += e.stream.speed * during;
-        // Layer n stands for the slab of flow [n, n + 1) spacings: it enters as the flow passes its middle, and
-        // is by now (flow - (n + 1/2) spacing) past the surface.
-        std::vector<Vec3d> x;
-        for (; (double(layers) + 0.5) * e.stream.spacing <= flow; ++layers) {
-            const Vec3d depth = e.stream.normal * (flow - (double(layers) + 0.5) * e.stream.spacing);
-            for (const Vec3d& p : e.stream.layers[layers & 1]) x.push_back(p + depth);
-        }
-        if (x.empty()) continue;
-        // New material brings energy in from outside, as a moving collider does: count it as external work.
-        const double v2 = double(e.velocity.squaredNorm());
-        for (const Vec3d& p : x) state_.energy.work += double(e.mass) * (0.5 * v2 - settings_.gravity.dot(p));
-        addParticles(e.species, x, e.velocity, e.mass, e.volume, e.set);
-    }
-}
-
 void Simulation::runFrameSubsteps() {
     const double frameEnd = double(state_.frame + 1) / settings_.fps;
     while (state_.time < frameEnd) {

@@ -7,6 +7,7 @@
 //  - the stability guard (core/Stability.h) and the phase timings.
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <functional>
 #include <limits>
@@ -113,6 +114,26 @@ struct PhaseSeconds {
     double other = 0.0;          ///< time step, stability checks
     double communication = 0.0;  ///< ranks: particles moving between ranks, halos, ghost velocities, global sums
     double total() const { return topology + binning + p2g + grid + g2p + other + communication; }
+};
+
+/// Books the wall time of its scope to one phase, less what the ranks' exchanges inside it booked as communication,
+/// so that each second is counted once.
+class PhaseTimer {
+public:
+    PhaseTimer(double& phase, const double& communication)
+        : phase_(phase), communication_(communication), before_(communication), start_(std::chrono::steady_clock::now()) {}
+    PhaseTimer(const PhaseTimer&) = delete;
+    PhaseTimer& operator=(const PhaseTimer&) = delete;
+    ~PhaseTimer() {
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+        phase_ += seconds - (communication_ - before_);
+    }
+
+private:
+    double& phase_;
+    const double& communication_;
+    double before_;
+    std::chrono::steady_clock::time_point start_;
 };
 
 class Simulation {
@@ -271,6 +292,8 @@ private:
     void rebalanceIfNeeded();
     void migrateParticles();
     void exchangeReachedLeaves(SparseGrid& grid, RankLeaves& leaves);
+    /// Which of a field's leaves are this rank's, and its ghost leaves each side of every rank pair, in leaf order.
+    void ownLeaves(const SparseGrid& grid, RankLeaves& leaves) const;
     void sendGhostVelocities(SparseGrid& grid, const RankLeaves& leaves);
     /// The mass and velocity of nodes other ranks own, from their owners (the mirror pass). Collective.
     void fetchNodes(const SparseGrid& grid, const std::vector<Vec3i>& nodes, std::vector<float>& mass,
@@ -285,9 +308,22 @@ private:
     /// The `separate` walls' contact test for field f (SurfaceContact): the rest density of its leaves' material.
     SurfaceContact surfaceContact(std::size_t field);
     /// P2G, G2P and the particle pass of the colliders, field by field.
-    void scatter(float dt);
-    G2PSummary gather(float dt);
+    void particlesToGrid(float dt);
+    G2PSummary gridToParticles(float dt);
     ProjectionSummary holdOutOfColliders(float dt);
+    /// Runs fn (a phase of the substep), booking its wall time to `phase` (PhaseTimer).
+    template <class Fn>
+    decltype(auto) timed(double& phase, Fn&& fn) {
+        const PhaseTimer timer(phase, phases_.communication);
+        return fn();
+    }
+    /// Runs fn (an exchange between ranks), booking its wall time as communication.
+    template <class Fn>
+    decltype(auto) communicating(Fn&& fn) {
+        return timed(phases_.communication, std::forward<Fn>(fn));
+    }
+    /// The ranks' halo exchange of field f's P2G (ghost leaves' parts to their owners).
+    RemoteHalos remoteHalos(std::size_t f);
     /// Poses every dynamic body where its velocities take it in a step dt, for the step's collider passes.
     void poseBodies(double dt);
     /// Moves the bodies through the step, then changes their velocities by gravity and what the material took from

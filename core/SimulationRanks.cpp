@@ -268,6 +268,79 @@ void Simulation::sendEmittedToOwners(int s, std::size_t from) {
         species);
 }
 
+RemoteHalos Simulation::remoteHalos(std::size_t f) {
+    RankLeaves& rl = rankLeaves_[f];
+    RemoteHalos remote;
+    remote.owned = &rl.owned;
+    remote.exchange = [this, &rl](HaloParts&& out) {
+        return communicating([&] {
+            std::vector<Bytes> send(static_cast<std::size_t>(comm_->size()));
+            for (const HaloParts::Part& part : out.parts) {
+                Bytes& b = send[std::size_t(ownerOf(part.leaf))];
+                for (int a = 0; a < 3; ++a) put(b, int32_t(part.leaf[a]));
+                put(b, part.d);
+                putArray(b, part.lo, 3);
+                putArray(b, part.hi, 3);
+                std::size_t n = 1;
+                for (int a = 0; a < 3; ++a) n *= std::size_t(part.hi[a] - part.lo[a]);
+                put(b, uint64_t(n));
+                putArray(b, out.data.data() + 4 * part.offset, 4 * n);
+            }
+            const std::vector<Bytes> received = comm_->exchange(send);
+            HaloParts in;
+            // What each rank's stencils read of a ghost leaf is what its parts wrote there: the velocities go
+            // back for that box alone, not for all the owner wrote.
+            rl.ghostBoxFor.assign(received.size(), {});
+            for (std::size_t from = 0; from < received.size(); ++from) {
+                const Bytes& b = received[from];
+                const std::vector<Vec3i>& coords = rl.ghostCoordsFor[from];
+                rl.ghostBoxFor[from].assign(coords.size(), NodeBox{});
+                ByteReader r{b};
+                while (!r.done()) {
+                    HaloParts::Part part;
+                    for (int a = 0; a < 3; ++a) part.leaf[a] = r.get<int32_t>();
+                    part.d = r.get<int32_t>();
+                    r.getArray(part.lo, 3);
+                    r.getArray(part.hi, 3);
+                    const auto at = std::lower_bound(coords.begin(), coords.end(), part.leaf, mortonLess);
+                    if (at != coords.end() && *at == part.leaf) {
+                        NodeBox box;
+                        for (int a = 0; a < 3; ++a) {
+                            const int shift = kLeafDim * neighbourStep(part.d, a);
+                            box.lo[a] = int8_t(part.lo[a] - shift);
+                            box.hi[a] = int8_t(part.hi[a] - shift);
+                        }
+                        rl.ghostBoxFor[from][std::size_t(at - coords.begin())].add(box);
+                    }
+                    const std::size_t n = r.get<uint64_t>();
+                    part.offset = in.data.size() / 4;
+                    in.data.resize(in.data.size() + 4 * n);
+                    r.getArray(in.data.data() + 4 * part.offset, 4 * n);
+                    in.parts.push_back(part);
+                }
+            }
+            return in;
+        });
+    };
+    return remote;
+}
+
+void Simulation::ownLeaves(const SparseGrid& grid, RankLeaves& rl) const {
+    rl.owned.assign(grid.leafCount(), 0);
+    for (auto& g : rl.ghostsFrom) g.clear();
+    rl.ghostsFrom.resize(std::size_t(comm_->size()));
+    for (std::size_t l = 0; l < grid.leafCount(); ++l) {
+        const int owner = ownerOf(leafOfNode(grid.leaf(l).origin));
+        if (owner == comm_->rank())
+            rl.owned[l] = 1;
+        else
+            rl.ghostsFrom[std::size_t(owner)].push_back(uint32_t(l));
+    }
+    rl.ghostsFor.assign(std::size_t(comm_->size()), {});
+    for (std::size_t r = 0; r < rl.ghostCoordsFor.size(); ++r)
+        for (const Vec3i& c : rl.ghostCoordsFor[r]) rl.ghostsFor[r].push_back(grid.indexOfLeaf(c));
+}
+
 void Simulation::exchangeReachedLeaves(SparseGrid& grid, RankLeaves& leaves) {
     // Each rank tells the owners of the leaves its stencils reach that it holds them as ghosts: the owner
     // must allocate them (its own particles may not reach them) and send their velocities back.
