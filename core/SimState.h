@@ -26,15 +26,15 @@ struct EnergyReference {
     double work = 0.0;   ///< energy moving colliders put in since the start (external work)
 };
 
-struct SimState {
-    std::vector<AnySpecies> species;  ///< particles of every species, with their parameters
-    double time = 0.0;                ///< [s]
-    int frame = 0;                    ///< frames completed
-    long long substeps = 0;           ///< substeps completed
-    int frameSubsteps = 0;            ///< substeps completed in the frame under way (0 between frames)
-    int32_t nextId = 0;               ///< id of the next particle emitted
-    int emittedFrame = -1;            ///< emitters' progress: the last frame whose emissions are done
-    int retries = 0;                  ///< frames restarted so far (stability retries)
+/// Where a run is, apart from its particles.
+struct SimProgress {
+    double time = 0.0;       ///< [s]
+    int frame = 0;           ///< frames completed
+    long long substeps = 0;  ///< substeps completed
+    int frameSubsteps = 0;   ///< substeps completed in the frame under way (0 between frames)
+    int32_t nextId = 0;      ///< id of the next particle emitted
+    int emittedFrame = -1;   ///< emitters' progress: the last frame whose emissions are done
+    int retries = 0;         ///< frames restarted so far (stability retries)
     /// Continuous emitters' progress, per emitter (zero for the others): how far material has flowed through
     /// the source surface [m], and how many layers of particles have entered.
     std::vector<double> streamFlow;
@@ -42,14 +42,15 @@ struct SimState {
     StepBounds bounds;
     EnergyReference energy;
     std::vector<RigidBodyState> bodies;  ///< the dynamic colliders', in collider order
+};
 
-    /// Everything but the particles: the scalars, and each species' name and parameters with no particle.
+struct SimState : SimProgress {
+    std::vector<AnySpecies> species;  ///< particles of every species, with their parameters
+
+    /// Everything but the particles: the progress, and each species' name and parameters with no particle.
     SimState withoutParticles() const {
         SimState out;
-        out.time = time, out.frame = frame, out.substeps = substeps, out.frameSubsteps = frameSubsteps;
-        out.nextId = nextId, out.emittedFrame = emittedFrame, out.retries = retries;
-        out.streamFlow = streamFlow, out.streamLayers = streamLayers, out.bounds = bounds, out.energy = energy;
-        out.bodies = bodies;
+        static_cast<SimProgress&>(out) = *this;
         for (const AnySpecies& s : species)
             std::visit(
                 [&](const auto& sp) {

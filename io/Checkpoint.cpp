@@ -101,6 +101,11 @@ public:
             left -= raw;
         }
     }
+    /// A length and the characters.
+    void text(const std::string& t) {
+        value(uint32_t(t.size()));
+        bytes(t.data(), t.size());
+    }
     uint64_t checksum() const { return sum_.value(); }
 
 private:
@@ -167,9 +172,16 @@ private:
     std::string path_;
 };
 
+/// Format 2 named a species' material by its position in the list of materials as it stood then; the list may
+/// have grown anywhere since, so those positions are kept here, frozen.
+std::string legacyMaterial(uint32_t position) {
+    static const char* const kFormat2Order[] = {"water", "jelly", "rubber", "snow", "sand", "metal", "viscous"};
+    return position < std::size(kFormat2Order) ? kFormat2Order[position] : "#" + std::to_string(position);
+}
+
 json headerOf(const CheckpointInfo& info) {
     json h = json::object();
-    h["format"] = info.format;
+    h["format"] = kCheckpointFormat;  // what this program writes, whatever the info read from an older file said
     h["program"] = info.program;
     h["scene_name"] = info.sceneName;
     h["frame"] = info.frame;
@@ -234,9 +246,9 @@ std::pair<CheckpointInfo, std::size_t> parseHeader(const char* b, std::size_t n,
         throw CheckpointError(path + ": header is not valid JSON: " + e.what());
     }
     CheckpointInfo info = infoOf(h, path);
-    if (info.format != kCheckpointFormat)
-        throw CheckpointError(path + ": format " + std::to_string(info.format) + ", this program reads format " +
-                              std::to_string(kCheckpointFormat));
+    if (info.format < kOldestCheckpointFormat || info.format > kCheckpointFormat)
+        throw CheckpointError(path + ": format " + std::to_string(info.format) + ", this program reads formats " +
+                              std::to_string(kOldestCheckpointFormat) + " to " + std::to_string(kCheckpointFormat));
     return {info, headerAt + headerBytes};
 }
 
@@ -279,9 +291,8 @@ void encodeCheckpoint(std::ostream& os, const CheckpointInfo& info, const SimSta
                 [&](const auto& sp) {
                     using P = std::decay_t<decltype(sp.params)>;
                     static_assert(std::is_trivially_copyable_v<P>, "material parameters are plain values");
-                    out.value(uint32_t(s.index()));
-                    out.value(uint32_t(sp.name.size()));
-                    out.bytes(sp.name.data(), sp.name.size());
+                    out.text(std::decay_t<decltype(sp)>::Material::kSceneName);
+                    out.text(sp.name);
                     out.value(uint32_t(sizeof(P)));
                     out.bytes(&sp.params, sizeof(P));
                     uint32_t arrays = 0;
@@ -344,9 +355,10 @@ Checkpoint decodeCheckpoint(std::vector<char> bytes, const std::string& path) {
     const uint32_t species = in.value<uint32_t>();
     if (species != s.bounds.minStiffnessKey.size()) in.fail("species count and step bounds disagree");
     for (uint32_t k = 0; k < species; ++k) {
-        const uint32_t material = in.value<uint32_t>();
+        const std::string material = c.info.format >= 3 ? in.text(in.value<uint32_t>()) : legacyMaterial(in.value<uint32_t>());
         AnyMaterialParams params;
-        if (!defaultMaterialParamsAt(material, params)) in.fail("unknown material index " + std::to_string(material));
+        if (!defaultMaterialParams(material, params))
+            in.fail("material '" + material + "' of species " + std::to_string(k) + " is not one this program has");
         const std::string name = in.text(in.value<uint32_t>());
         const uint32_t paramBytes = in.value<uint32_t>();
         AnySpecies sp = makeSpecies(name, params);

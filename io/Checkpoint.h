@@ -50,8 +50,9 @@ struct Checkpoint {
     SimState state;
 };
 
-/// The current checkpoint format.
-inline constexpr int kCheckpointFormat = 2;  ///< 2: continuous emitters' progress
+/// The current checkpoint format, and the oldest this program still reads.
+inline constexpr int kCheckpointFormat = 3;        ///< 3: a species' material by its scene name
+inline constexpr int kOldestCheckpointFormat = 2;  ///< 2: continuous emitters' progress; materials by list position
 
 /// Writes `state` atomically to path (io/AtomicFile.h). Throws WriteError.
 void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const SimState& state);

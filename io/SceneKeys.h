@@ -24,16 +24,14 @@ inline constexpr Named<Boundary> kBoundaries[] = {
 inline constexpr Named<Sampling> kSamplings[] = {
     {Sampling::Poisson, "poisson"}, {Sampling::Grid, "grid"}, {Sampling::Lattice, "lattice"}};
 
-/// The colour a set's points take unless the set gives one (linear RGB; tools/render_blender.py draws with it).
+/// The colour a set's points take unless the set gives one: its material's kColour (linear RGB; tools/render_blender.py
+/// draws with it).
 inline Vec3f defaultColour(const std::string& material) {
-    if (material == "water") return {0.15f, 0.4f, 0.9f};
-    if (material == "jelly") return {0.85f, 0.2f, 0.25f};
-    if (material == "rubber") return {0.55f, 0.25f, 0.7f};
-    if (material == "snow") return {0.92f, 0.94f, 0.97f};
-    if (material == "sand") return {0.76f, 0.6f, 0.38f};
-    if (material == "metal") return {0.72f, 0.74f, 0.78f};
-    if (material == "viscous") return {0.8f, 0.45f, 0.05f};
-    return {0.6f, 0.6f, 0.6f};
+    Vec3f colour(0.6f, 0.6f, 0.6f);
+    forEachMaterial(AllMaterials{}, [&]<class M>() {
+        if (material == M::kSceneName) colour = Vec3f(M::kColour[0], M::kColour[1], M::kColour[2]);
+    });
+    return colour;
 }
 
 template <class V>

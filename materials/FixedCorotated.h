@@ -13,6 +13,8 @@ namespace mpm {
 struct FixedCorotated {
     static constexpr const char* kName = "fixed_corotated";
     static constexpr const char* kSceneName = "jelly";
+    /// The colour its points take unless a set gives one (Cd, linear RGB).
+    static constexpr float kColour[3] = {0.85f, 0.2f, 0.25f};
     static constexpr const char* kSummary = "fixed corotated elasticity (Stomakhin et al. 2012; thesis 4.6-4.8)";
 
     struct Params : ElasticParams {};  // its own type, so that a parameter set names its model

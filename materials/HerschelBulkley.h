@@ -28,6 +28,8 @@ namespace mpm {
 struct HerschelBulkley {
     static constexpr const char* kName = "herschel_bulkley";
     static constexpr const char* kSceneName = "viscous";
+    /// The colour its points take unless a set gives one (Cd, linear RGB).
+    static constexpr float kColour[3] = {0.8f, 0.45f, 0.05f};
     static constexpr const char* kSummary =
         "viscous and yield-stress liquid: Herschel-Bulkley flow (Bingham and Newtonian as special cases) on an elastic "
         "regularisation, water's equation of state for pressure (Yue et al. 2015)";

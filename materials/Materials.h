@@ -6,6 +6,7 @@
 //     static constexpr const char* kName;        // the model ("fixed_corotated")
 //     static constexpr const char* kSceneName;   // what a scene calls it ("jelly"); unique in the list
 //     static constexpr const char* kSummary;     // one line for `mpm validate --explain`, with its paper
+//     static constexpr float kColour[3];          // its points' colour unless a set gives one (Cd, linear RGB)
 //     struct Params { ... };                     // constant per species, SI units; initial values are the defaults
 //     struct State  { vectors...; forEachArray(f) (and const); appendRest(n) or appendRest(n, params); };
 //     template <class V> static void keys(V&, Params&);          // its scene keys (materials/Parameters.h)
@@ -65,6 +66,7 @@ concept MaterialModel = requires(const typename M::Params& cp, typename M::Param
     { M::kName } -> std::convertible_to<const char*>;
     { M::kSceneName } -> std::convertible_to<const char*>;
     { M::kSummary } -> std::convertible_to<const char*>;
+    { M::kColour[2] } -> std::convertible_to<float>;
     M::keys(v, p);
     M::scaleStiffness(p, 1.0, 1.0);
     { M::kirchhoff(cp, cs, i) } -> std::convertible_to<Mat3f>;
@@ -90,7 +92,7 @@ template <class M>
 constexpr bool checkMaterial() {
     static_assert(MaterialModel<M>,
                   "this type does not meet the material contract: see the @code block at the top of materials/Materials.h "
-                  "(kName, kSceneName, kSummary, Params, State, keys, scaleStiffness, kirchhoff, updateDeformation, "
+                  "(kName, kSceneName, kSummary, kColour, Params, State, keys, scaleStiffness, kirchhoff, updateDeformation, "
                   "energyDensity, volumeRatio, stiffnessKey, waveSpeed)");
     return true;
 }
@@ -118,7 +120,8 @@ constexpr bool paramsUnique(MaterialList<Ms...>) {
     return ((countOf<typename Ms::Params, typename Ms::Params...> == 1) && ...);
 }
 
-// Checkpoints name a material by its place here: a new one goes last.
+// The order is free: checkpoints name a material by kSceneName, and output files carry the names of the indices
+// they write (the points' `material_names` metadata).
 using AllMaterials = MaterialList<Water, FixedCorotated, NeoHookean, Snow, Sand, VonMises, HerschelBulkley MPM_EXTRA_MATERIALS>;
 static_assert(checkMaterials(AllMaterials{}));
 static_assert(sceneNamesUnique(AllMaterials{}), "two materials share a kSceneName");

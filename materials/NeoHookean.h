@@ -17,6 +17,8 @@ namespace mpm {
 struct NeoHookean {
     static constexpr const char* kName = "neo_hookean";
     static constexpr const char* kSceneName = "rubber";
+    /// The colour its points take unless a set gives one (Cd, linear RGB).
+    static constexpr float kColour[3] = {0.55f, 0.25f, 0.7f};
     static constexpr const char* kSummary =
         "compressible neo-Hookean elasticity (Bonet and Wood 2008; thesis 4.3, 4.5); undefined for inverted elements (J <= 0), "
         "where a run stops naming the particle";

@@ -28,6 +28,8 @@ inline constexpr Named<YieldSurface> kYieldSurfaces[] = {{YieldSurface::DruckerP
 struct Sand {
     static constexpr const char* kName = "sand";
     static constexpr const char* kSceneName = "sand";
+    /// The colour its points take unless a set gives one (Cd, linear RGB).
+    static constexpr float kColour[3] = {0.76f, 0.6f, 0.38f};
     static constexpr const char* kSummary = "Drucker-Prager sand with Hencky elasticity (Klar et al. 2016; thesis 4.12-4.18)";
     static constexpr int kDim = 3;
     /// Thesis Fig. 6.1.

@@ -14,6 +14,8 @@ namespace mpm {
 struct Snow {
     static constexpr const char* kName = "snow";
     static constexpr const char* kSceneName = "snow";
+    /// The colour its points take unless a set gives one (Cd, linear RGB).
+    static constexpr float kColour[3] = {0.92f, 0.94f, 0.97f};
     static constexpr const char* kSummary =
         "Stomakhin et al. 2013 snow: fixed corotated on F_E, hardening, clamped singular values";
 

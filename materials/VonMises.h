@@ -21,6 +21,8 @@ namespace mpm {
 struct VonMises {
     static constexpr const char* kName = "von_mises";
     static constexpr const char* kSceneName = "metal";
+    /// The colour its points take unless a set gives one (Cd, linear RGB).
+    static constexpr float kColour[3] = {0.72f, 0.74f, 0.78f};
     static constexpr const char* kSummary =
         "metal: von Mises plasticity with linear isotropic hardening on Hencky elasticity (Simo 1992; Simo and Hughes 1998, Box "
         "3.2)";

@@ -19,6 +19,8 @@ namespace mpm {
 struct Water {
     static constexpr const char* kName = "water";
     static constexpr const char* kSceneName = "water";
+    /// The colour its points take unless a set gives one (Cd, linear RGB).
+    static constexpr float kColour[3] = {0.15f, 0.4f, 0.9f};
     static constexpr const char* kSummary =
         "weakly compressible water, Tait-like equation of state (thesis 4.1-4.2; Tampubolon et al. 2017)";
 

@@ -13,6 +13,7 @@
 
 #include "io/Run.h"
 #include "io/Scene.h"
+#include "io/SceneKeys.h"
 #include "io/VdbWriter.h"
 
 namespace py = pybind11;
@@ -235,6 +236,18 @@ PYBIND11_MODULE(sparse_mpm, m) {
         "name: P (n, 3) float64, v (n, 3) float32, id, material, set (int32), and pscale, Cd, J, Jp, stress_norm, "
         "plastic_strain, F "
         "(n, 3, 3) where the file has them.");
+    m.def(
+        "material_colours",
+        [] {
+            py::dict d;
+            for (const std::string& name : materialSceneNames()) {
+                const Vec3f c = defaultColour(name);
+                d[py::str(name)] = py::make_tuple(c[0], c[1], c[2]);
+            }
+            return d;
+        },
+        "Each material's default colour of its points (linear RGB), by scene name: what a set takes unless it gives "
+        "\"color\".");
     m.def(
         "read_bodies",
         [](const std::string& path) {

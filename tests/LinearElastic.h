@@ -11,6 +11,7 @@ namespace mpm {
 struct LinearElastic {
     static constexpr const char* kName = "linear_elastic";
     static constexpr const char* kSceneName = "linear";
+    static constexpr float kColour[3] = {0.6f, 0.6f, 0.6f};
     static constexpr const char* kSummary = "small-strain linear elasticity (Jiang et al. 2016, sec. 6.1; defined by the tests)";
     static constexpr YoungPoisson kDefault{1.0e5, 0.3};
 

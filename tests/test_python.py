@@ -202,6 +202,19 @@ class SimulationTest(unittest.TestCase):
         self.assertAlmostEqual(2 * math.atan2(b["orient"][0][1], b["orient"][0][3]), 3 * 2 / 24, places=5)
         self.assertEqual(len(sparse_mpm.read_bodies(os.path.join(out, "spin_0001.vdb"))["collider"]), 1)
 
+    def test_the_render_tools_material_colours_are_the_engines(self):
+        # tools/render_blender.py runs in Blender's own Python, which cannot load this module: it keeps a copy of
+        # the materials' colours (kColour) for surfaces of sets of several colours, checked here.
+        import ast
+        path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "render_blender.py")
+        tree = ast.parse(open(path).read())
+        copy = next(ast.literal_eval(n.value) for n in tree.body if isinstance(n, ast.Assign)
+                    and any(getattr(t, "id", "") == "MATERIAL_COLOURS" for t in n.targets))
+        engine = sparse_mpm.material_colours()
+        self.assertEqual(set(copy), set(engine))
+        for name, rgb in engine.items():
+            np.testing.assert_allclose(copy[name], rgb, atol=1e-6, err_msg=name)
+
     def test_a_bad_scene_is_a_named_error(self):
         bad = scene_file(self.dir, "bad.json", {"sets": [{"material": "wter"}]})
         with self.assertRaises(ValueError) as caught:

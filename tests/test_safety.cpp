@@ -290,6 +290,57 @@ TEST(Safety, CheckpointReadsBackBitForBit) {
     EXPECT_THROW(readCheckpoint(dir + "/short.mpmc"), CheckpointError);
 }
 
+TEST(Safety, ACheckpointOfFormatTwoResumesWithEachSetsMaterialWhereverTheListOfMaterialsHasGrown) {
+    // tests/data/every_material_format2.mpmc is frame 1 of tests/data/every_material.json (a block of each of the seven
+    // materials, 64 particles each) as a build of format 2 wrote it: a material by its position in the list. Format
+    // 3 names it, so a material added anywhere in the list no longer changes which model an old checkpoint loads.
+    const std::string data = std::string(MPM_SOURCE_DIR) + "/tests/data/";
+    const Checkpoint old = readCheckpoint(data + "every_material_format2.mpmc");
+    EXPECT_EQ(old.info.format, 2);
+    const SceneDesc desc = parseScene(readFile(data + "every_material.json"), "every_material.json");
+    auto fresh = buildSimulation(desc);
+    fresh->emitDue();
+    const auto materialOf = [](const AnySpecies& s) {
+        return std::visit([](const auto& sp) { return std::string(std::decay_t<decltype(sp)>::Material::kSceneName); }, s);
+    };
+    const auto paramBytes = [](const AnySpecies& s) {
+        return std::visit([](const auto& sp) { return std::string((const char*)&sp.params, sizeof(sp.params)); }, s);
+    };
+    ASSERT_EQ(old.state.species.size(), desc.sets.size());
+    for (std::size_t s = 0; s < desc.sets.size(); ++s) {
+        EXPECT_EQ(materialOf(old.state.species[s]), desc.sets[s].material);
+        EXPECT_EQ(std::visit([](const auto& sp) { return sp.name; }, old.state.species[s]), desc.sets[s].name);
+        EXPECT_EQ(particlesOf(old.state.species[s]).size(), 64u) << desc.sets[s].name;
+        EXPECT_EQ(paramBytes(old.state.species[s]), paramBytes(fresh->state().species[s])) << desc.sets[s].name;
+    }
+    // Written again it is format 3 and reads back with the same materials and bits.
+    const std::string dir = tempDir("format2");
+    writeCheckpoint(dir + "/again.mpmc", old.info, old.state);
+    const Checkpoint again = readCheckpoint(dir + "/again.mpmc");
+    EXPECT_EQ(again.info.format, kCheckpointFormat);
+    ASSERT_EQ(again.state.species.size(), old.state.species.size());
+    for (std::size_t s = 0; s < old.state.species.size(); ++s) {
+        EXPECT_EQ(materialOf(again.state.species[s]), materialOf(old.state.species[s]));
+        EXPECT_EQ(paramBytes(again.state.species[s]), paramBytes(old.state.species[s]));
+        EXPECT_EQ(particlesOf(again.state.species[s]).x, particlesOf(old.state.species[s]).x);
+    }
+    // And `--resume` continues from it to frame 2, every set keeping its mass. --force: the test is of the format, and
+    // keys added to the scene format since the file was made would count as a changed scene.
+    fs::create_directories(dir + "/out");
+    fs::copy_file(data + "every_material_format2.mpmc", dir + "/out/every_material_checkpoint_0001.mpmc");
+    const std::string scene = writeFile(dir + "/every_material.json", readFile(data + "every_material.json"));
+    const auto r = runMpm({"run", scene, "-o", dir + "/out", "--resume", "--force", "--quiet"}, dir);
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_TRUE(fs::exists(dir + "/out/every_material_0002.vdb"));
+    const Checkpoint resumed = readCheckpoint(dir + "/out/every_material_checkpoint_0002.mpmc");
+    EXPECT_EQ(resumed.info.frame, 2);
+    ASSERT_EQ(resumed.state.species.size(), old.state.species.size());
+    for (std::size_t s = 0; s < old.state.species.size(); ++s) {
+        EXPECT_EQ(materialOf(resumed.state.species[s]), desc.sets[s].material);
+        EXPECT_EQ(particlesOf(resumed.state.species[s]).mass, particlesOf(old.state.species[s]).mass);
+    }
+}
+
 TEST(Safety, ACorruptCheckpointFallsBackToTheOneBeforeAndAChangedSceneIsRefused) {
     const std::string dir = tempDir("corrupt");
     const std::string scene = writeFile(dir + "/flow.json", kScene);

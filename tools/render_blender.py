@@ -32,7 +32,8 @@ import sys
 import bpy
 from mathutils import Matrix, Quaternion, Vector
 
-# Base colours per material (linear RGB); sets of other materials take the palette in order.
+# Base colours per material (linear RGB), a copy of the materials' kColour (materials/*.h; tests/test_python.py
+# compares them); sets of other materials take the palette in order.
 MATERIAL_COLOURS = {"water": (0.15, 0.4, 0.9), "jelly": (0.85, 0.2, 0.25), "rubber": (0.55, 0.25, 0.7),
                     "snow": (0.92, 0.94, 0.97), "sand": (0.76, 0.6, 0.38),
                     "metal": (0.72, 0.74, 0.78), "viscous": (0.8, 0.45, 0.05)}
