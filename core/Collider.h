@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/Types.h"
+#include "base/Types.h"
 #include "sparse/LeafGeometry.h"
 
 namespace mpm {
@@ -75,7 +75,7 @@ private:
 
 /// Where a `separate` wall acts (simulation.wall_contact). With "stencil", on every node inside the collider that
 /// has mass, so the wall reaches material up to the stencil's half width (1.5 cells for the quadratic kernel)
-/// before its surface arrives. With "surface" (the default), a node inside the collider acts only once the
+/// before its surface arrives (the default). With "surface", a node inside the collider acts only once the
 /// material has reached the collider's surface there: a node of mass m is covered to the share f = m / (rho dx^3) of its support,
 /// which a flat material surface s cells beyond the node gives when f = F(s) (F the kernel's covered fraction); the material
 /// touches the wall at the node when s + phi / dx <= 0.

@@ -4,7 +4,7 @@
 // OpenVDB stays inside core/LevelSet.cpp: a Sampler is the per-task accessor a collider keeps.
 #include <memory>
 
-#include "core/Types.h"
+#include "base/Types.h"
 
 namespace mpm {
 

@@ -13,7 +13,7 @@
 #include <memory>
 #include <vector>
 
-#include "core/Types.h"
+#include "base/Types.h"
 
 namespace mpm {
 

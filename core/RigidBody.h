@@ -25,9 +25,9 @@
 #include <cmath>
 #include <vector>
 
+#include "base/Types.h"
 #include "core/ExactSum.h"
 #include "core/Motion.h"
-#include "core/Types.h"
 
 namespace mpm {
 

@@ -6,7 +6,7 @@
 #include <variant>
 #include <vector>
 
-#include "core/Types.h"
+#include "base/Types.h"
 #include "materials/Materials.h"
 
 namespace mpm {

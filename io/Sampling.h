@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cstddef>
 #include <memory>
+#include <type_traits>
 #include <utility>
 #include <variant>
 #include <vector>
@@ -33,8 +34,30 @@ private:
     double volume_;
 };
 
-/// What sampling fills: an analytic shape, or the inside of a file's level set.
-using SetRegion = std::variant<Box, Sphere, Cylinder, LevelSetInside>;
+namespace sampling_detail {
+/// The set shapes with a formula (kAnalyticVolume), in SetShape's order, then `Last`.
+template <class Kept, class Last, class... S>
+struct Regions;
+template <class... K, class Last>
+struct Regions<std::variant<K...>, Last> {
+    using type = std::variant<K..., Last>;
+};
+template <class... K, class Last, class S, class... Rest>
+struct Regions<std::variant<K...>, Last, S, Rest...> {
+    using type =
+        typename Regions<std::conditional_t<kAnalyticVolume<S>, std::variant<K..., S>, std::variant<K...>>, Last, Rest...>::type;
+};
+template <class Shapes>
+struct RegionsOf;
+template <class... S>
+struct RegionsOf<std::variant<S...>> {
+    using type = typename Regions<std::variant<>, LevelSetInside, S...>::type;
+};
+}  // namespace sampling_detail
+
+/// What sampling fills: a set's shape with a formula (every such shape of SetShape), or the inside of a file's level
+/// set.
+using SetRegion = sampling_detail::RegionsOf<SetShape>::type;
 
 /// Fraction of a lattice spacing by which grid sampling jitters each point (keeps min spacing > 0.5 s).
 inline constexpr double kGridJitter = 0.25;

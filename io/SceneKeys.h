@@ -1,6 +1,6 @@
 #pragma once
 // The scene keys of the simulation settings, the output, a particle set and a collider, in the form of
-// materials/Parameters.h: the reader and `mpm validate --explain` walk these same functions. The keys of a
+// base/Parameters.h: the reader and `mpm validate --explain` walk these same functions. The keys of a
 // material are in its header (materials/), those of a shape in its file (core/shapes/).
 #include <limits>
 #include <sstream>

@@ -71,7 +71,7 @@ public:
     const std::string& path() const { return path_; }
     bool has(std::string_view key) const { return in_.contains(key); }
 
-    // The key visitor (materials/Parameters.h).
+    // The key visitor (base/Parameters.h).
     template <class T>
     void number(const Key& k, T& value) {
         double v = double(value);

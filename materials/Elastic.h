@@ -5,8 +5,8 @@
 #include <cmath>
 #include <vector>
 
-#include "core/Types.h"
-#include "materials/Parameters.h"
+#include "base/Parameters.h"
+#include "base/Types.h"
 
 namespace mpm {
 

@@ -9,7 +9,7 @@
 //     static constexpr float kColour[3];          // its points' colour unless a set gives one (Cd, linear RGB)
 //     struct Params { ... };                     // constant per species, SI units; initial values are the defaults
 //     struct State  { vectors...; forEachArray(f) (and const); appendRest(n) or appendRest(n, params); };
-//     template <class V> static void keys(V&, Params&);          // its scene keys (materials/Parameters.h)
+//     template <class V> static void keys(V&, Params&);          // its scene keys (base/Parameters.h)
 //     static void   scaleStiffness(Params&, double lambdaScale, double muScale);  // a set's Lame scales
 //     static Mat3f  kirchhoff(const Params&, const State&, size_t i);              // tau = P F^T
 //     static void   updateDeformation(const Params&, State&, size_t i, const Mat3f& gradV, float dt); // + return map

@@ -18,7 +18,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/Types.h"
+#include "base/Types.h"
 
 namespace mpm {
 

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 
-#include "core/Types.h"
+#include "base/Types.h"
 
 namespace mpm {
 

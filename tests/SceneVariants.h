@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/Types.h"
+#include "base/Types.h"
 
 namespace mpm::test {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "core/Types.h"
+#include "base/Types.h"
 
 namespace mpm::test {
 

@@ -4,7 +4,7 @@
 # (every .cpp and .h under the source folders, build folders aside), so the check needs no git.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mapfile -t files < <(find apps bench core io materials python sparse tests tools -type f \( -name '*.cpp' -o -name '*.h' \) | sort)
+mapfile -t files < <(find apps base bench core io materials python sparse tests tools -type f \( -name '*.cpp' -o -name '*.h' \) | sort)
 if [ "${#files[@]}" -eq 0 ]; then
   echo "check-format: no C++ file found under $(pwd)" >&2
   exit 1

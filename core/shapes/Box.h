@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/Parameters.h"
 #include "core/shapes/MassProperties.h"
 #include "core/shapes/Rotation.h"
-#include "materials/Parameters.h"
 
 namespace mpm {
 

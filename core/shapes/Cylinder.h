@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/Parameters.h"
 #include "core/shapes/MassProperties.h"
-#include "materials/Parameters.h"
 
 namespace mpm {
 

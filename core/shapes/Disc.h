@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "materials/Parameters.h"
+#include "base/Parameters.h"
 
 namespace mpm {
 

@@ -4,8 +4,8 @@
 // colliders they are solids (or containers); as particle sets, their inside is filled.
 #include <string>
 
+#include "base/Parameters.h"
 #include "core/shapes/Placement.h"
-#include "materials/Parameters.h"
 
 namespace mpm {
 

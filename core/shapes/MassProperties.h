@@ -5,7 +5,7 @@
 // colliders, each with the radius of the ball around it that the surface holds (a sphere: its centre and radius).
 #include <vector>
 
-#include "core/Types.h"
+#include "base/Types.h"
 
 namespace mpm {
 

@@ -3,7 +3,7 @@
 // positive on the side the normal points to. A collider shape only: it has no finite volume to fill.
 #include <cmath>
 
-#include "materials/Parameters.h"
+#include "base/Parameters.h"
 
 namespace mpm {
 

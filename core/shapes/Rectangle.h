@@ -6,7 +6,7 @@
 #include <cmath>
 #include <vector>
 
-#include "materials/Parameters.h"
+#include "base/Parameters.h"
 
 namespace mpm {
 

@@ -2,7 +2,7 @@
 // A rotation as a scene writes it: {"axis": [x, y, z], "degrees": a}, about the shape's centre.
 #include <cmath>
 
-#include "materials/Parameters.h"
+#include "base/Parameters.h"
 
 namespace mpm {
 

@@ -2,8 +2,8 @@
 // Solid ball: phi(x) = |x - c| - r (thesis section 5). Fills a particle set or collides.
 #include <cmath>
 
+#include "base/Parameters.h"
 #include "core/shapes/MassProperties.h"
-#include "materials/Parameters.h"
 
 namespace mpm {
 

@@ -26,7 +26,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/Types.h"
+#include "base/Types.h"
 
 namespace mpm {
 
