@@ -188,7 +188,7 @@ void FrameWriter::writeFrame(int frame, const std::vector<AnySpecies>& species, 
         }
     const PointCloud cloud = gatherPoints(species, layout_.materialOfSpecies, attributes_);
     if (o.points || o.surface || o.density || o.velocity) writeVdbFrame(r, cloud);
-    if (o.ply) writePly(framePath(frame, "", ".ply"), cloud);
+    if (o.ply) writePly(framePath(frame, "", ".ply"), cloud, materialSceneNames());
     lastWrite_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (part_ < 0) recordStats(stats);
 }

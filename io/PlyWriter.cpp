@@ -33,12 +33,15 @@ struct Record {
 
 }  // namespace
 
-void writePly(const std::string& path, const PointCloud& f) {
+void writePly(const std::string& path, const PointCloud& f, const std::vector<std::string>& materialNames) {
     const std::size_t n = f.size();
     const bool colour = f.Cd.size() == n && n > 0, pscale = f.pscale.size() == n && n > 0;
     const bool J = f.J.size() == n && n > 0, Jp = f.Jp.size() == n && n > 0, stress = f.stressNorm.size() == n && n > 0,
                F = f.F.size() == n && n > 0, plastic = f.plasticStrain.size() == n && n > 0;
-    std::string header = "ply\nformat binary_little_endian 1.0\ncomment sparse-mpm particles, SI units, Y up\nelement vertex " +
+    std::string names;
+    for (const std::string& m : materialNames) names += " " + m;
+    std::string header = "ply\nformat binary_little_endian 1.0\ncomment sparse-mpm particles, SI units, Y up\n" +
+                         (names.empty() ? std::string() : "comment material_names" + names + "\n") + "element vertex " +
                          std::to_string(n) +
                          "\nproperty double x\nproperty double y\nproperty double z\nproperty float vx\nproperty float vy\n"
                          "property float vz\nproperty int id\nproperty int material\nproperty int set\n";

@@ -121,7 +121,7 @@ constexpr bool paramsUnique(MaterialList<Ms...>) {
 }
 
 // The order is free: checkpoints name a material by kSceneName, and output files carry the names of the indices
-// they write (the points' `material_names` metadata).
+// they write (the VDB points' `material_names` metadata, a PLY header's comment).
 using AllMaterials = MaterialList<Water, FixedCorotated, NeoHookean, Snow, Sand, VonMises, HerschelBulkley MPM_EXTRA_MATERIALS>;
 static_assert(checkMaterials(AllMaterials{}));
 static_assert(sceneNamesUnique(AllMaterials{}), "two materials share a kSceneName");

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <unordered_map>
 
@@ -262,6 +263,12 @@ TEST(Output, PointsCarryHoudinisAttributesAndGroups) {
     EXPECT_NEAR(back.pscale[0], 0.05 / 4.0, 0.05 * 0.05);
     // The PLY: the same particles with positions in double, as the state holds them.
     const PointCloudData ply = readPlyPoints(writer.framePath(1, "", ".ply"));
+    // Its header names the material indices, as the VDB's material_names does.
+    std::string names;
+    for (const std::string& m : materialSceneNames()) names += " " + m;
+    std::ifstream plyFile(writer.framePath(1, "", ".ply"), std::ios::binary);
+    const std::string plyBytes((std::istreambuf_iterator<char>(plyFile)), std::istreambuf_iterator<char>());
+    EXPECT_NE(plyBytes.find("\ncomment material_names" + names + "\n"), std::string::npos);
     std::map<int32_t, Vec3d> x;
     for (const AnySpecies& s : sim->species())
         for (std::size_t i = 0; i < particlesOf(s).size(); ++i) x[particlesOf(s).id[i]] = particlesOf(s).x[i];
