@@ -20,6 +20,7 @@
 //     template <class T, class F> void list(const Key&, std::vector<T>&, F&& f);  // f(visitor&, T&) per element
 // };
 // @endcode
+#include <initializer_list>
 #include <limits>
 #include <span>
 #include <string>
@@ -82,6 +83,15 @@ struct KeyVisitorArchetype {
         for (T& item : items) f(*this, item);
     }
 };
+
+/// Whether the names a list gives its members (materials' kSceneName, shapes' kType) all differ: a scene picks a
+/// member by its name.
+constexpr bool namesDistinct(std::initializer_list<std::string_view> names) {
+    for (auto a = names.begin(); a != names.end(); ++a)
+        for (auto b = a + 1; b != names.end(); ++b)
+            if (*a == *b) return false;
+    return true;
+}
 
 /// A type that describes its scene keys.
 template <class T>

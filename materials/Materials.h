@@ -105,11 +105,7 @@ constexpr bool checkMaterials(MaterialList<Ms...>) {
 /// Scene names must be unique: a scene picks its model by that name.
 template <class... Ms>
 constexpr bool sceneNamesUnique(MaterialList<Ms...>) {
-    constexpr std::string_view names[] = {Ms::kSceneName...};
-    for (std::size_t a = 0; a < sizeof...(Ms); ++a)
-        for (std::size_t b = a + 1; b < sizeof...(Ms); ++b)
-            if (names[a] == names[b]) return false;
-    return true;
+    return namesDistinct({Ms::kSceneName...});
 }
 
 /// Parameter types must differ between models too: a scene's parameter set says which model it is for.

@@ -91,11 +91,7 @@ constexpr bool checkColliderShape() {
 /// Whether the `type` names of a list's shapes differ: a scene picks its shape by that name.
 template <class... S>
 constexpr bool typeNamesUnique(const std::variant<S...>*) {
-    constexpr std::string_view names[] = {S::kType...};
-    for (std::size_t a = 0; a < sizeof...(S); ++a)
-        for (std::size_t b = a + 1; b < sizeof...(S); ++b)
-            if (names[a] == names[b]) return false;
-    return true;
+    return namesDistinct({S::kType...});
 }
 static_assert(typeNamesUnique(static_cast<SetShape*>(nullptr)), "two set shapes share a kType");
 static_assert(typeNamesUnique(static_cast<ColliderShape*>(nullptr)), "two collider shapes share a kType");
