@@ -12,6 +12,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <unordered_map>
 
@@ -74,12 +75,21 @@ double TriangleMesh::area() const {
 }
 
 double meshFieldBytes(const TriangleMesh& mesh, double voxelSize, double bandWidth) {
-    // A leaf is 8 voxels on a side; a band crosses about band / leaf + 1 of them, and each straddles the surface.
-    constexpr double kLeafVoxels = 8.0, kLeavesAcrossExtra = 2.0;
+    // Nodes of a tree level whose nodes span `dim` voxels: a band crosses about band / span + 1 of them, each
+    // straddling the surface; and an object astride their boundaries takes up to 8 however small it is.
+    const double area = mesh.area();
+    const auto nodes = [&](double dim, double atLeast) {
+        const double span = dim * voxelSize;
+        return std::max(atLeast, area / (span * span) * (bandWidth / span + 2.0));
+    };
+    using Leaf = openvdb::FloatTree::LeafNodeType;
+    using Upper = openvdb::FloatTree::RootNodeType::ChildNodeType;
+    using Lower = Upper::ChildNodeType;
+    constexpr double kCorners = 8.0;
+    // Each voxel of the leaves holds its distance and, while the conversion runs, its closest triangle's index.
     constexpr double kBytesPerVoxel = sizeof(float) + sizeof(int32_t);
-    const double leaf = kLeafVoxels * voxelSize;
-    const double leaves = mesh.area() / (leaf * leaf) * (bandWidth / leaf + kLeavesAcrossExtra);
-    return leaves * kLeafVoxels * kLeafVoxels * kLeafVoxels * kBytesPerVoxel;
+    return nodes(Leaf::DIM, 1.0) * double(Leaf::NUM_VOXELS) * kBytesPerVoxel + nodes(Lower::DIM, kCorners) * sizeof(Lower) +
+           nodes(Upper::DIM, kCorners) * sizeof(Upper);
 }
 
 std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std::string& path, double voxelSize,
@@ -114,27 +124,32 @@ std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std
 }
 
 namespace {
-/// The grid `gridName` of a VDB file; errors name the file and, for a missing grid, the grids it has.
-openvdb::GridBase::Ptr readVdbGrid(const std::string& path, const std::string& gridName) {
+/// Throws naming the file and the grids it holds, where an open VDB file has no grid `gridName`.
+void requireGrid(openvdb::io::File& file, const std::string& path, const std::string& gridName) {
+    if (file.hasGrid(gridName)) return;
+    // OpenVDB lists an unnamed grid as "[i]", i its place among the unnamed ones: worth saying, or it reads as no name at
+    // all.
+    std::string names;
+    bool unnamed = false;
+    for (auto it = file.beginName(); it != file.endName(); ++it) {
+        const std::string name = *it;
+        names += (names.empty() ? "\"" : ", \"") + name + "\"";
+        unnamed = unnamed || (!name.empty() && name.front() == '[');
+    }
+    throw LevelSetError(path + ": no grid \"" + gridName + "\" (the file holds " + (names.empty() ? "no grids" : names) +
+                        (unnamed ? "; \"[0]\" is a grid without a name, and \"grid\": \"[0]\" reads it" : "") + ")");
+}
+
+/// The grid `gridName` of a VDB file, whole (`metadataOnly`: its metadata and transform, no voxels); errors name the
+/// file and, for a missing grid, the grids it has.
+openvdb::GridBase::Ptr readVdbGrid(const std::string& path, const std::string& gridName, bool metadataOnly = false) {
     openvdb::initialize();
     if (!std::filesystem::is_regular_file(path)) throw LevelSetError(path + ": no such VDB file");
     try {
         openvdb::io::File file(path);
         file.open();
-        if (!file.hasGrid(gridName)) {
-            // OpenVDB lists an unnamed grid as "[i]", i its place among the unnamed ones: worth saying, or it reads as no name at
-            // all.
-            std::string names;
-            bool unnamed = false;
-            for (auto it = file.beginName(); it != file.endName(); ++it) {
-                const std::string name = *it;
-                names += (names.empty() ? "\"" : ", \"") + name + "\"";
-                unnamed = unnamed || (!name.empty() && name.front() == '[');
-            }
-            throw LevelSetError(path + ": no grid \"" + gridName + "\" (the file holds " + (names.empty() ? "no grids" : names) +
-                                (unnamed ? "; \"[0]\" is a grid without a name, and \"grid\": \"[0]\" reads it" : "") + ")");
-        }
-        openvdb::GridBase::Ptr base = file.readGrid(gridName);
+        requireGrid(file, path, gridName);
+        openvdb::GridBase::Ptr base = metadataOnly ? file.readGridMetadata(gridName) : file.readGrid(gridName);
         file.close();
         return base;
     } catch (const openvdb::Exception& e) {
@@ -142,6 +157,23 @@ openvdb::GridBase::Ptr readVdbGrid(const std::string& path, const std::string& g
     }
 }
 }  // namespace
+
+double vdbFieldBytes(const std::string& path, const std::string& gridName, double scale, double band) {
+    const openvdb::GridBase::Ptr meta = readVdbGrid(path, gridName, true);
+    double bytes = double(std::filesystem::file_size(path));
+    if (const auto recorded = meta->getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_MEM_BYTES))
+        bytes = double(recorded->value());
+    // vdbLevelSet grows the band to `band`, by no more voxels than the object is wide.
+    constexpr double kNarrowestBandVoxels = 3.0;
+    const double voxel = meta->voxelSize()[0] * scale;
+    if (!(voxel > 0.0)) return bytes;
+    double widest = std::numeric_limits<double>::infinity();
+    const auto lo = meta->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MIN);
+    const auto hi = meta->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MAX);
+    if (lo && hi) widest = std::max(1.0, openvdb::Vec3d(hi->value() - lo->value()).length());
+    const double grownVoxels = std::min(band / voxel, kNarrowestBandVoxels + widest);
+    return bytes * std::max(1.0, grownVoxels / kNarrowestBandVoxels);
+}
 
 std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName, double reach,
                                             const Placement& placement, double band) {

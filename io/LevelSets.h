@@ -33,8 +33,8 @@ TriangleMesh readMesh(const std::string& path);
 
 /// About how many bytes OpenVDB's mesh-to-volume conversion holds for `mesh`'s distance field at `voxelSize`,
 /// with a band `bandWidth` [m] wide in all: the leaves of 8^3 voxels along the surface, each voxel with its
-/// distance and the conversion's closest-triangle index. Known before building, so a mesh scaled or placed by
-/// mistake is refused with the estimate instead of exhausting memory.
+/// distance and the conversion's closest-triangle index, and the tree's internal nodes above them. Known before
+/// building, so a mesh scaled or placed by mistake is refused with the estimate instead of exhausting memory.
 double meshFieldBytes(const TriangleMesh& mesh, double voxelSize, double bandWidth);
 
 /// A closed mesh as a solid (thickness 0), or any mesh as a shell of half-thickness `thickness` around its
@@ -51,6 +51,12 @@ std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std
 /// and a node or particle there would not be held. 0: the band as the file has it.
 std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& grid, double reach,
                                             const Placement& placement = {}, double band = 0.0);
+
+/// About how many bytes grid `grid` of a VDB file takes once read, placed at `scale` and its band grown to `band` [m]
+/// on either side (as vdbLevelSet does), known from the grid's metadata without reading its voxels: the memory
+/// OpenVDB and Houdini record with each grid (file_mem_bytes), or else the file's size, grown in proportion to the
+/// band's width over the file's (taken as the usual 3 voxels, the narrowest a level set is written with).
+double vdbFieldBytes(const std::string& path, const std::string& grid, double scale, double band);
 
 /// The volume inside a level set's zero crossing [m^3] (OpenVDB's levelSetVolume).
 double insideVolume(const LevelSet& ls);

@@ -156,18 +156,6 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         }
         b.sets.push_back(s);
     }
-    b.machineBytes = machineMemoryBytes();
-    if (b.memoryBytes > b.machineBytes)
-        b.problems.push_back(
-            "/sets: " +
-            std::string(ranks > 1 ? "rank 0 of " + std::to_string(ranks) + " (its share" +
-                                        std::string(scene.output.rankFiles == "gathered"
-                                                        ? ", and every particle gathered to write a frame or checkpoint)"
-                                                        : ")")
-                                  : "the run") +
-            " needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) +
-            " particles, and this machine has " + gib(b.machineBytes) +
-            "; use fewer particles (particles_per_cell, count, duration) or a larger dx");
     // The first step: the target, or the CFL bound at rest (the same rule as the engine's).
     const double target = st.targetDt();
     const double speed = double(c) + double(vmax), g = st.gravity.norm(), reach = st.cfl * dx;
@@ -215,6 +203,23 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
             b.problems.push_back(p.str());
         }
     }
+    // Every rank holds every collider's field whole.
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i) b.colliderBytes += colliderFieldBytes(scene, i);
+    b.memoryBytes += b.colliderBytes;
+    b.machineBytes = machineMemoryBytes();
+    if (b.memoryBytes > b.machineBytes)
+        b.problems.push_back(
+            "/sets: " +
+            std::string(ranks > 1 ? "rank 0 of " + std::to_string(ranks) + " (its share" +
+                                        std::string(scene.output.rankFiles == "gathered"
+                                                        ? ", and every particle gathered to write a frame or checkpoint)"
+                                                        : ")")
+                                  : "the run") +
+            " needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) + " particles" +
+            (b.colliderBytes > 0.0 ? " and " + gib(b.colliderBytes) + " of collider distance fields" : "") +
+            ", and this machine has " + gib(b.machineBytes) +
+            "; use fewer particles (particles_per_cell, count, duration) or a larger dx" +
+            (b.colliderBytes > 0.0 ? ", or a coarser voxel_size for mesh colliders" : ""));
     return b;
 }
 
@@ -224,8 +229,9 @@ std::string describeBudget(const SceneBudget& b) {
         s << "set " << set.name << ": " << (set.estimated ? "about " : "") << set.particles << " particles, " << set.mass
           << " kg, " << set.volume << " m^3 per emission; " << set.emissions << " emission" << (set.emissions == 1 ? "" : "s")
           << "\n";
-    s << "memory: about " << gib(b.memoryBytes) << " at the peak (" << (long long)b.peakParticles
-      << " particles); this machine has " << gib(b.machineBytes) << "\n";
+    s << "memory: about " << gib(b.memoryBytes) << " at the peak (" << (long long)b.peakParticles << " particles";
+    if (b.colliderBytes > 0.0) s << ", and " << gib(b.colliderBytes) << " of collider distance fields";
+    s << "); this machine has " << gib(b.machineBytes) << "\n";
     s << "substeps per frame: about " << b.substepsPerFrame << " at the start (dt = " << b.dt << " s, set by " << b.stepCause
       << ")\n";
     if (b.runSeconds > 0.0) s << "run time: about " << duration(b.runSeconds) << " here (" << b.runBasis << ")\n";

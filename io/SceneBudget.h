@@ -22,7 +22,8 @@ struct SetBudget {
 struct SceneBudget {
     std::vector<SetBudget> sets;
     double peakParticles = 0.0;         ///< once every emission is done
-    double memoryBytes = 0.0;           ///< peak, estimated
+    double memoryBytes = 0.0;           ///< peak, estimated, the colliders' fields included
+    double colliderBytes = 0.0;         ///< the distance fields of the colliders read from files
     double machineBytes = 0.0;          ///< physical memory of this machine
     double substepsPerFrame = 0.0;      ///< at the start
     double dt = 0.0;                    ///< the first step

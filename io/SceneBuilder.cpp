@@ -99,6 +99,18 @@ struct FieldNotes {
     std::string warning;
 };
 
+/// How far a mesh's distance field reaches outside and inside its surface [m]: outside past a leaf's half diagonal
+/// of the skip test where it can, inside levelSetBand.
+struct MeshBand {
+    double exterior = 0.0, interior = 0.0;
+    /// Across the surface in all, a shell's own thickness included.
+    double width(const MeshShape& m) const { return exterior + interior + 2.0 * m.thickness; }
+};
+MeshBand meshBand(double dx, double voxel) {
+    constexpr double kExteriorCells = 2.0, kExteriorVoxels = 3.0;
+    return MeshBand{kExteriorCells * dx + kExteriorVoxels * voxel, levelSetBand(dx)};
+}
+
 /// A mesh whose vertices lie beyond the grid's coordinate range, or whose distance field would not fit in this
 /// machine's memory (a scale or a unit given by mistake: a 0.1 m part scaled by 1e6), is refused before OpenVDB
 /// tries to build the field, naming what to change.
@@ -140,12 +152,11 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
         notes->voxel = f.voxel;
         if (place && !resolves(f.voxel, f.wall.thinnest)) notes->warning = thinWallWarning(scene, where, m, f);
     }
-    // Outside the band reaches past a leaf's half diagonal of the skip test where it can; inside, levelSetBand.
-    constexpr double kExteriorCells = 2.0;
-    const double exterior = kExteriorCells * dx + 3.0 * f.voxel, interior = levelSetBand(dx);
-    refuseFieldTooLarge(scene, where, m, f, exterior + interior + 2.0 * m.thickness);
+    const MeshBand band = meshBand(dx, f.voxel);
+    refuseFieldTooLarge(scene, where, m, f, band.width(m));
     try {
-        return meshLevelSet(f.mesh, besideScene(scene, m.file), f.voxel, m.thickness, exterior, interior, colliderReach(dx));
+        return meshLevelSet(f.mesh, besideScene(scene, m.file), f.voxel, m.thickness, band.exterior, band.interior,
+                            colliderReach(dx));
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
     }
@@ -821,6 +832,36 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
             sim->addCollider(std::move(colliders[i]));
     if (derived) *derived = std::move(found);
     return sim;
+}
+
+double colliderFieldBytes(const SceneDesc& scene, std::size_t i) {
+    const ColliderDesc& c = scene.colliders[i];
+    const std::string where = "/colliders/" + std::to_string(i);
+    const double dx = scene.settings.dx;
+    return std::visit(
+        [&]<class S>(const S& shape) -> double {
+            if constexpr (std::is_same_v<S, MeshShape>) {
+                const MeshField f = meshField(scene, where, shape, true, c.inside);
+                const double band = meshBand(dx, f.voxel).width(shape);
+                refuseFieldTooLarge(scene, where, shape, f, band);
+                return meshFieldBytes(f.mesh, f.voxel, band);
+            } else if constexpr (std::is_same_v<S, VdbShape>) {
+                try {
+                    const std::string path = besideScene(scene, shape.file);
+                    // A sequence holds the two frames around the time it is interpolated at.
+                    constexpr double kSequenceFramesHeld = 2.0;
+                    const bool sequence = shape.file.find("$F") != std::string::npos;
+                    const std::string file = sequence ? sequenceFile(path, sequenceFrames(path).front()) : path;
+                    return (sequence ? kSequenceFramesHeld : 1.0) *
+                           vdbFieldBytes(file, shape.grid, shape.transform.scale, levelSetBand(dx));
+                } catch (const LevelSetError& e) {
+                    throw SceneError(scene.file + ": " + where + "/file: " + e.what());
+                }
+            } else {
+                return 0.0;  // a formula
+            }
+        },
+        c.shape);
 }
 
 DerivedValues deriveValues(const SceneDesc& scene) {

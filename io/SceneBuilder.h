@@ -83,6 +83,11 @@ struct SetupWatch {
 std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm = Comm::single(),
                                             DerivedValues* derived = nullptr, const SetupWatch& watch = {});
 
+/// About how many bytes collider `i`'s distance field takes while it is built and used: a mesh's from its surface at
+/// the voxel the builder picks (io/LevelSets.h, meshFieldBytes), a VDB file's from its grid's metadata (vdbFieldBytes);
+/// 0 for a shape with a formula. Reads the collider's file; a mesh whose field could not fit this machine is refused.
+double colliderFieldBytes(const SceneDesc& scene, std::size_t i);
+
 /// What buildSimulation would derive, without building it: the colliders are made and the spinning sets sampled.
 DerivedValues deriveValues(const SceneDesc& scene);
 

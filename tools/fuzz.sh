@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# Fuzzes the scene reader with libFuzzer (clang 14 from Debian) for a bounded time, starting from the
+# Fuzzes the scene reader and builder with libFuzzer (clang 14 from Debian) for a bounded time, starting from the
 # checked-in seed corpus. Usage: tools/fuzz.sh [SECONDS] [BUILD_DIR] [RELEASE_BUILD]   (default 60 s, build-fuzz,
-# build). The reader and the budget are built here with the fuzzer and the sanitizers; what the budget calls
-# to measure file-based sets (the scene builder, level sets, the engine) is linked from the Release build's
-# libraries, which must exist (the README's test command makes them).
+# build). The reader, the budget, the builder and the level sets from files are built here with the fuzzer and
+# the sanitizers; the engine they set up (and step once) is linked from the Release build's libraries, which must
+# exist (the README's test command makes them). The scenes' files are looked for in scenes/assets.
 # Exits non-zero on any finding (the crashing input is left in BUILD_DIR as crash-*); prints executions per
 # second, the corpus size and the findings.
 set -euo pipefail
@@ -22,10 +22,20 @@ if nm -u "$release/libmpm_comm.a" 2>/dev/null | grep MPI_Init_thread >/dev/null 
 fi
 mkdir -p "$build/corpus"
 CXX=${CXX_FUZZ:-clang++-14}
-flags=(-std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -I. -isystem /usr/include/eigen3)
-srcs=(tests/fuzz/fuzz_scene.cpp io/SceneReader.cpp io/SceneBudget.cpp io/Sampling.cpp core/Species.cpp)
-# Rebuild only when a source changed.
-if [ ! -x "$build/fuzz_scene" ] || [ -n "$(find "${srcs[@]}" io core materials sparse "${libs[@]:0:3}" -newer "$build/fuzz_scene" -print -quit)" ]; then
+# The Release libraries' target CPU: Eigen aligns its fixed-size types by the vector width, and objects made on one
+# side are freed on the other (a rigid body's state is 32-byte aligned under AVX2).
+arch=()
+if grep -q '^MPM_NATIVE:BOOL=ON' "$release/CMakeCache.txt"; then
+  arch=(-march=native)
+elif grep -q '^MPM_X86_64_V3:BOOL=ON' "$release/CMakeCache.txt"; then
+  arch=(-march=x86-64-v3)
+fi
+flags=("${arch[@]}" -std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined -I. -isystem /usr/include/eigen3
+  "-DMPM_FUZZ_ASSETS=\"$PWD/scenes/assets\"" -fsanitize-ignorelist=tests/fuzz/sanitizer-ignore.txt)
+srcs=(tests/fuzz/fuzz_scene.cpp io/SceneReader.cpp io/SceneBudget.cpp io/Sampling.cpp io/SceneBuilder.cpp io/LevelSets.cpp
+  io/MeshThickness.cpp core/Species.cpp)
+# Rebuild only when a source, this script or the Release configuration changed.
+if [ ! -x "$build/fuzz_scene" ] || [ -n "$(find "${srcs[@]}" io core materials sparse tests/fuzz/sanitizer-ignore.txt tools/fuzz.sh "$release/CMakeCache.txt" "${libs[@]:0:3}" -newer "$build/fuzz_scene" -print -quit)" ]; then
   "$CXX" "${flags[@]}" "${srcs[@]}" "${libs[@]}" -o "$build/fuzz_scene"
 fi
 cp -n tests/fuzz/corpus/* "$build/corpus/" 2>/dev/null || true
