@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -84,8 +85,27 @@ inline std::string vdbWithoutUuid(const std::string& path) {
 /// stats.csv without the wall_seconds column (the last one).
 inline std::string statsWithoutWallTime(const std::string& path) {
     std::istringstream in(readFile(path));
-    std::string out;
-    for (std::string line; std::getline(in, line);) out += line.substr(0, line.rfind(',')) + "\n";
+    std::string out, header;
+    std::getline(in, header);
+    // The column by its name: rigid bodies' columns follow it.
+    const auto cells = [](const std::string& line) {
+        std::vector<std::string> c;
+        std::istringstream l(line);
+        for (std::string cell; std::getline(l, cell, ',');) c.push_back(cell);
+        if (!line.empty() && line.back() == ',') c.emplace_back();
+        return c;
+    };
+    const std::vector<std::string> names = cells(header);
+    const std::size_t wall = std::size_t(std::find(names.begin(), names.end(), "wall_seconds") - names.begin());
+    const auto without = [&](const std::string& line) {
+        std::vector<std::string> c = cells(line);
+        if (wall < c.size()) c.erase(c.begin() + std::ptrdiff_t(wall));
+        std::string kept;
+        for (std::size_t i = 0; i < c.size(); ++i) kept += (i ? "," : "") + c[i];
+        return kept + "\n";
+    };
+    out += without(header);
+    for (std::string line; std::getline(in, line);) out += without(line);
     return out;
 }
 

@@ -11,6 +11,7 @@
 #include <map>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -263,6 +264,42 @@ TEST(Ranks, BodiesWithFieldsOfTheirOwnGiveTheBitsOfOneProcess) {
     // owns, in every field.
     const std::string scene = std::string(MPM_SOURCE_DIR) + "/tests/scenes/bodies.json";
     expectSameBitsOnRanks(scene, "bodies", dir, {{2, "2"}, {3, "1"}});
+}
+
+TEST(Ranks, RigidBodiesInMaterialSpreadOverTheRanksGiveTheBitsOfOneProcess) {
+    REQUIRE_MPI();
+    const std::string dir = tempDir("ranks_rigid");
+    // A heavy ball thrown spinning into a pool that spans the ranks' ranges, and a light box on the water in its way:
+    // each body's impulse is summed from nodes and particles on every rank, and the ball meets the box and the tank.
+    const std::string scene = writeFile(dir + "/rigid.json", R"({
+      "simulation": { "frames": 3, "substeps": 8, "dx": 0.02 },
+      "output": { "split_files": true, "ply": true, "checkpoint_every": 0 },
+      "sets": [ { "name": "pool", "material": "water",
+                  "shape": { "type": "box", "min": [0.0, 0.0, 0.0], "max": [0.6, 0.12, 0.2] } } ],
+      "colliders": [
+        { "type": "box", "min": [0.0, 0.0, 0.0], "max": [0.6, 0.4, 0.2], "inside": true, "friction": 0.3 },
+        { "type": "sphere", "center": [0.21, 0.19, 0.1], "radius": 0.05, "friction": 0.3,
+          "dynamic": { "density": 3500, "velocity": [1.5, -1.5, 0], "angular_velocity": [0, 0, -5] } },
+        { "type": "box", "center": [0.33, 0.13, 0.1], "size": [0.08, 0.04, 0.08], "friction": 0.3,
+          "dynamic": { "density": 500 } } ] })");
+    expectSameBitsOnRanks(scene, "rigid", dir, {{2, "1"}, {3, "1"}});
+    // The rows compared above hold both bodies, and the ball went into the water: its centre at the last frame is
+    // below the surface (0.12 m).
+    std::istringstream stats(readFile(dir + "/one/stats.csv"));
+    std::string header, row, last;
+    std::getline(stats, header);
+    while (std::getline(stats, row))
+        if (!row.empty()) last = row;
+    const auto column = [](const std::string& line, std::size_t k) {
+        std::istringstream in(line);
+        std::string cell;
+        for (std::size_t i = 0; i <= k; ++i) std::getline(in, cell, ',');
+        return cell;
+    };
+    std::size_t ballY = 0;
+    while (column(header, ballY) != "body0_y" && ballY < header.size()) ++ballY;
+    ASSERT_NE(header.find("body1_wz"), std::string::npos) << header;
+    EXPECT_LT(std::stod(column(last, ballY)), 0.12) << last;
 }
 
 TEST(Ranks, PerRankPartFilesHoldEveryParticleOnceWithTheBitsOfTheWholeFrame) {
