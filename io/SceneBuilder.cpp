@@ -19,6 +19,7 @@
 #include "io/PointFile.h"
 #include "io/Sampling.h"
 #include "io/SceneBudget.h"
+#include "io/SceneKeys.h"
 
 namespace mpm {
 
@@ -269,7 +270,7 @@ std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, 
                     return collider;
                 } else {
                     throw SceneError(scene.file + ": " + where + "/dynamic: a " + S::kType +
-                                     " collider cannot be a rigid body yet; the shapes that can: sphere, box, cylinder");
+                                     " collider cannot be a rigid body yet; the shapes that can: " + bodyShapeNames());
                 }
             }
             if constexpr (kFromFile<S>) {

@@ -321,6 +321,18 @@ inline const std::vector<std::string>& kAxisLocks() {
     return locks;
 }
 
+/// The `type` names of the collider shapes a rigid body can be, "sphere, box, cylinder": those whose mass, centre of
+/// mass and inertia come in closed form (massProperties, core/shapes/MassProperties.h).
+inline const std::string& bodyShapeNames() {
+    static const std::string names = []<class... S>(std::variant<S...>*) {
+        std::string n;
+        const auto add = [&n](const char* type) { n += (n.empty() ? "" : ", ") + std::string(type); };
+        ((requires(const S& s) { s.massProperties(); } ? add(S::kType) : void()), ...);
+        return n;
+    }(static_cast<ColliderShape*>(nullptr));
+    return names;
+}
+
 /// A collider the material moves: a rigid body (core/RigidBody.h).
 template <class V>
 void dynamicKeys(V& v, DynamicDesc& d) {
@@ -365,12 +377,11 @@ void colliderKeys(V& v, ColliderDesc& c) {
     v.flag(Key{.name = "inside", .help = "keep material inside it (a tank, a glass, a drum) instead of outside"}, c.inside);
     v.object(Key{.name = "motion", .help = "how it moves (none: static)"}, [&](auto& m) { motionKeys(m, c.motion); });
     c.dynamic.enabled = v.given("dynamic");
-    v.object(Key{.name = "dynamic",
-                 .help = "makes it a rigid body the material moves, under gravity (sphere, box and cylinder; not with motion "
-                         "or inside)",
-                 .byDefault = "absent: it moves only as its motion says",
-                 .derived = true},
-             [&](auto& d) { dynamicKeys(d, c.dynamic); });
+    static const std::string dynamicHelp =
+        "makes it a rigid body the material moves, under gravity (" + bodyShapeNames() + "; not with motion or inside)";
+    v.object(
+        Key{.name = "dynamic", .help = dynamicHelp, .byDefault = "absent: it moves only as its motion says", .derived = true},
+        [&](auto& d) { dynamicKeys(d, c.dynamic); });
     const MotionDesc& m = c.motion;
     v.check(!c.dynamic.enabled || (m.velocity.isZero() && m.angularVelocity.isZero() && m.keyframes.empty() && !m.pivotGiven),
             "dynamic", "a body the material moves takes no motion (its velocity is dynamic/velocity); give one or the other");

@@ -15,6 +15,7 @@
 #include "io/Checkpoint.h"
 #include "io/Output.h"
 #include "io/SceneBuilder.h"
+#include "io/SceneKeys.h"
 #include "io/SceneReader.h"
 #include "io/VdbWriter.h"
 #include "tests/SceneVariants.h"
@@ -378,4 +379,25 @@ TEST(RigidBody, BodiesCollideKeepingMomentumAndRestOnOneAnother) {
     // most about one step's gravity, g dt = 0.01 m/s, in the two (measured 1.7e-3 and 1.4e-3 m/s).
     EXPECT_LT(ball.velocity.norm(), 0.01);
     EXPECT_LT(box.velocity.norm(), 0.01);
+}
+
+TEST(RigidBody, AShapeWithoutMassPropertiesIsRefusedNamingTheShapesThatCan) {
+    // Which shapes can be bodies follows from the shapes' types (massProperties), in the error and in the key's help.
+    const std::string names = bodyShapeNames();
+    EXPECT_EQ(names, "sphere, box, cylinder");
+    const auto scene = [](const std::string& collider) {
+        return R"({"simulation": {"frames": 1}, "sets": [{"material": "water", "shape": {"type": "box", "min": [0, 0, 0],
+            "max": [0.1, 0.1, 0.1]}}], "colliders": [)" +
+               collider + "]}";
+    };
+    try {
+        buildSimulation(parseScene(scene(R"({"type": "plane", "dynamic": {"density": 100}})"), "/tmp/rigid_body_test.json"));
+        FAIL() << "a dynamic plane was built";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("/colliders/0/dynamic: a plane collider cannot be a rigid body yet; the shapes "
+                                             "that can: " +
+                                             names),
+                  std::string::npos)
+            << e.what();
+    }
 }
