@@ -1,9 +1,11 @@
 #include "io/SceneBudget.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <sstream>
 
@@ -96,6 +98,16 @@ std::string duration(double seconds) {
 }  // namespace
 
 double machineMemoryBytes() { return double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE)); }
+
+double addressSpaceLeft() {
+    rlimit limit{};
+    if (::getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return std::numeric_limits<double>::infinity();
+    // What is mapped now: the first field of /proc/self/statm, in pages.
+    std::ifstream statm("/proc/self/statm");
+    double pages = 0.0;
+    statm >> pages;
+    return std::max(0.0, double(limit.rlim_cur) - pages * double(::sysconf(_SC_PAGE_SIZE)));
+}
 
 SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks) {
     SceneBudget b;

@@ -36,6 +36,8 @@ struct SceneBudget {
 
 /// Physical memory of this machine [bytes].
 double machineMemoryBytes();
+/// Address space this process may still map under its limit (ulimit -v) [bytes]; infinite without a limit.
+double addressSpaceLeft();
 
 /// Estimates the scene's cost. With countExactly, sets of up to a few million particles are sampled to count
 /// them exactly (validate does; a run, which samples them anyway, does not). On `ranks` processes the memory

@@ -128,13 +128,19 @@ void refuseFieldTooLarge(const SceneDesc& scene, const std::string& where, const
             throw SceneError(e.str());
         }
     }
-    const double bytes = meshFieldBytes(f.mesh, f.voxel, band), machine = machineMemoryBytes();
-    if (bytes > machine) {
+    // OpenVDB builds the field in its worker threads, where running out of memory ends the program (std::terminate)
+    // instead of reaching our handler: so the field must also fit what this process may still map (ulimit -v).
+    const double bytes = meshFieldBytes(f.mesh, f.voxel, band), machine = machineMemoryBytes(), mappable = addressSpaceLeft();
+    if (bytes > std::min(machine, mappable)) {
         std::ostringstream e;
         e.precision(3);
         e << at << ": its distance field would take about " << bytes / double(1u << 30) << " GiB (a surface of " << f.mesh.area()
-          << " m^2 at a voxel of " << f.voxel << " m), and this machine has " << machine / double(1u << 30)
-          << " GiB; check the mesh's units and transform.scale (" << m.transform.scale << "), or set a coarser voxel_size";
+          << " m^2 at a voxel of " << f.voxel << " m), and ";
+        if (mappable < machine)
+            e << "this process may map " << mappable / double(1u << 30) << " GiB more (its address-space limit, ulimit -v)";
+        else
+            e << "this machine has " << machine / double(1u << 30) << " GiB";
+        e << "; check the mesh's units and transform.scale (" << m.transform.scale << "), or set a coarser voxel_size";
         throw SceneError(e.str());
     }
 }
