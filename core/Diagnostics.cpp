@@ -103,6 +103,13 @@ std::string FrameStats::csvHeader(std::size_t bodies) {
     return h;
 }
 
+std::string csvField(const std::string& text) {
+    if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+    std::string q = "\"";
+    for (char c : text) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+}
+
 std::string FrameStats::csvRow() const {
     char buf[1024], dt[32], wall[32];
     std::snprintf(buf, sizeof(buf), "%d,%.9g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%zu,%zu,%d,%d,",
@@ -111,14 +118,8 @@ std::string FrameStats::csvRow() const {
                   substeps, retries);
     std::snprintf(dt, sizeof(dt), "%.9g,", stepDt);
     std::snprintf(wall, sizeof(wall), ",%.6f", wallSeconds);
-    // The limit names a species, which may hold any character: quoted as CSV quotes (RFC 4180) when it must be.
-    std::string limit = stepLimit;
-    if (limit.find_first_of(",\"\n\r") != std::string::npos) {
-        std::string q = "\"";
-        for (char c : limit) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-        limit = q + "\"";
-    }
-    std::string row = std::string(buf) + dt + limit + wall;
+    // The limit names a species, which may hold any character.
+    std::string row = std::string(buf) + dt + csvField(stepLimit) + wall;
     for (const RigidBodyState& b : bodies) {
         double v[RigidBodyState::kDoubles];
         b.write(v);

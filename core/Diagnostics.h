@@ -11,6 +11,9 @@
 
 namespace mpm {
 
+/// A CSV field as RFC 4180 quotes it when it must be (a name may hold any character: commas, quotes, newlines).
+std::string csvField(const std::string& text);
+
 struct FrameStats {
     int frame = 0;
     double time = 0.0;

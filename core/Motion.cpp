@@ -27,10 +27,11 @@ Motion Motion::keyframes(std::vector<Key> keys, const Vec3d& pivot, double fps) 
     return m;
 }
 
-Motion Motion::dynamic(std::shared_ptr<const BodyFrame> frame) {
+Motion Motion::dynamic(std::shared_ptr<const BodyFrame> frame, std::shared_ptr<const Motion> animation) {
     Motion m;
     m.kind_ = Kind::Dynamic;
     m.frame_ = std::move(frame);
+    m.animation_ = std::move(animation);
     return m;
 }
 
@@ -40,7 +41,7 @@ Pose Motion::at(double t) const {
         case Kind::None:
             return pose;
         case Kind::Dynamic:
-            return frame_->pose;
+            return animated() ? animation_->at(t) : frame_->pose;
         case Kind::Constant: {
             const double angle = angular_.norm() * t;
             pose.R = angle > 0.0 ? Eigen::AngleAxisd(angle, angular_.normalized()).toRotationMatrix() : Mat3d::Identity();
@@ -67,12 +68,13 @@ Pose Motion::at(double t) const {
     return pose;
 }
 
-Motion::Rates Motion::ratesAt(double t) const {
+Motion::Rates Motion::ratesAt(double t, bool before) const {
     Rates r;
     switch (kind_) {
         case Kind::None:
             return r;
         case Kind::Dynamic:
+            if (animated()) return animation_->ratesAt(t, before);
             // v_c(x) = v + w x (x - c), which velocityAt writes about the pose's origin T.
             r.angular = frame_->angular;
             r.linear = frame_->linear + frame_->angular.cross(frame_->pose.T - frame_->centre);
@@ -84,9 +86,12 @@ Motion::Rates Motion::ratesAt(double t) const {
             return r;
         case Kind::Keyframes: {
             const double f = t * fps_;
-            if (keys_.size() < 2 || f < keys_.front().frame || f >= keys_.back().frame) return r;  // held
+            // Held before the first key and after the last; at a key, the segment after it (or, before, the one ending there).
+            if (keys_.size() < 2 || (before ? f <= keys_.front().frame || f > keys_.back().frame
+                                            : f < keys_.front().frame || f >= keys_.back().frame))
+                return r;
             std::size_t k = 0;
-            while (k + 1 < keys_.size() && keys_[k + 1].frame <= f) ++k;
+            while (k + 1 < keys_.size() && (before ? keys_[k + 1].frame < f : keys_[k + 1].frame <= f)) ++k;
             const double dt = (keys_[k + 1].frame - keys_[k].frame) / fps_;
             // Slerp turns at a constant rate about a fixed axis: w = axis angle / dt.
             Eigen::AngleAxisd turn(keys_[k + 1].rotation * keys_[k].rotation.inverse());

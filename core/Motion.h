@@ -7,7 +7,8 @@
 //    x(f) = p(f) + R(f) (x_rest - pivot), p linear and R spherical linear (slerp) between keys, held before
 //    the first key and after the last; frames may be fractional;
 //  - dynamic: a rigid body the material moves (core/RigidBody.h); the simulation poses it before each substep's
-//    collider passes, and the motion reads that pose whatever the time asked.
+//    collider passes, and the motion reads that pose whatever the time asked. An animated body follows a motion of
+//    the kinds above until it is released (the frame says when), as a prescribed collider, and is a body after.
 // The velocity of a point x of the collider is v_c(x) = dT/dt + w x (x - T') with w the angular velocity,
 // which is what sticky, slip, separate and friction act relative to.
 #include <memory>
@@ -33,6 +34,7 @@ struct BodyFrame {
     Pose pose;
     Vec3d centre = Vec3d::Zero();  ///< of mass, in the world
     Vec3d linear = Vec3d::Zero(), angular = Vec3d::Zero();
+    bool released = true;  ///< false while an animated body follows its animation
 };
 
 class Motion {
@@ -48,10 +50,11 @@ public:
     static Motion constant(const Vec3d& velocity, const Vec3d& angularVelocity, const Vec3d& pivot);
     /// Keys sorted by frame (at least one); fps turns frames into time.
     static Motion keyframes(std::vector<Key> keys, const Vec3d& pivot, double fps);
-    /// A body the material moves: the pose is whatever `frame` holds when asked.
-    static Motion dynamic(std::shared_ptr<const BodyFrame> frame);
+    /// A body the material moves: the pose is whatever `frame` holds when asked; with an `animation`, that motion's
+    /// pose while the frame is not released (the body then acts as a prescribed collider: not dynamic).
+    static Motion dynamic(std::shared_ptr<const BodyFrame> frame, std::shared_ptr<const Motion> animation = nullptr);
 
-    bool dynamic() const { return kind_ == Kind::Dynamic; }
+    bool dynamic() const { return kind_ == Kind::Dynamic && !animated(); }
     /// The point a dynamic body's angular impulse is taken about: its centre of mass (the origin for the others).
     Vec3d momentCentre() const { return frame_ ? frame_->centre : Vec3d::Zero(); }
 
@@ -61,15 +64,20 @@ public:
     struct Rates {
         Vec3d linear = Vec3d::Zero(), angular = Vec3d::Zero();
     };
-    Rates ratesAt(double t) const;
+    /// `before`: the rates just before t (where keyframes change them at t: a body released at its last key leaves
+    /// at the velocity that brought it there).
+    Rates ratesAt(double t, bool before = false) const;
     Vec3d velocityAt(const Vec3d& x, const Pose& pose, const Rates& r) const { return r.linear + r.angular.cross(x - pose.T); }
 
 private:
+    bool animated() const { return animation_ && !frame_->released; }
+
     enum class Kind { None, Constant, Keyframes, Dynamic } kind_ = Kind::None;
     Vec3d velocity_ = Vec3d::Zero(), angular_ = Vec3d::Zero(), pivot_ = Vec3d::Zero();
     std::vector<Key> keys_;
     double fps_ = 24.0;
     std::shared_ptr<const BodyFrame> frame_;
+    std::shared_ptr<const Motion> animation_;
 };
 
 }  // namespace mpm

@@ -25,6 +25,20 @@ RigidBodyState RigidBodyModel::initial(const Vec3d& velocity, const Vec3d& spin)
     return s;
 }
 
+RigidBodyState RigidBodyModel::animated(double t) const {
+    const Pose pose = animation->at(t);
+    RigidBodyState s;
+    s.centre = pose.toWorld(restCentre);
+    s.orientation = Eigen::Quaterniond(pose.R).normalized();
+    // The velocities at t, or just before the release where t is past it (the step that ends there may overshoot it).
+    const double tv = std::min(t, release);
+    const Pose at = tv == t ? pose : animation->at(tv);
+    const Motion::Rates rates = animation->ratesAt(tv, true);
+    s.velocity = animation->velocityAt(at.toWorld(restCentre), at, rates);
+    s.spin = rates.angular;
+    return s;
+}
+
 Mat3d RigidBodyModel::worldInertia(const Eigen::Quaterniond& q) const {
     const Mat3d R = q.toRotationMatrix();
     return R * inertia * R.transpose();
@@ -48,14 +62,122 @@ void RigidBodyModel::accelerate(const RigidBodyState& start, RigidBodyState& s, 
     s.spin = worldInertia(s.orientation).ldlt().solve(momentum).cwiseProduct(turnFree);
 }
 
-int RigidBodyModel::touch(RigidBodyState& s, const std::vector<const Collider*>& fixed, double t, double dt) const {
-    struct Contact {
-        Vec3d r, n, vc;       ///< from the centre to the contact point; the collider's outward normal and velocity there
-        double depth;         ///< < 0: a gap the next step may close, no more
-        double mu;            ///< infinite on a sticky collider
-        double normal = 0.0;  ///< accumulated normal impulse
-        Vec3d tangential = Vec3d::Zero();
+namespace {
+
+/// A contact point between body a and what it touches (body b, or a fixed collider).
+struct Contact {
+    Vec3d ra, rb;                      ///< from each centre to the contact point
+    Vec3d n;                           ///< the normal, pointing from b (or the collider) to a
+    Vec3d vc = Vec3d::Zero();          ///< a fixed collider's velocity at the point (zero between bodies)
+    double depth;                      ///< < 0: a gap the next step may close, no more
+    double mu;                         ///< Coulomb coefficient, infinite for a sticky collider
+    double restitution = 0.0;          ///< separating over approaching speed
+    double target = 0.0;               ///< the normal velocity the contact seeks: the gap's closing, or a bounce
+    double normal = 0.0;               ///< accumulated normal impulse
+    Vec3d tangential = Vec3d::Zero();  ///< accumulated friction impulse
+};
+
+/// One side of the contacts: its state and how an impulse changes its velocities (nothing, for a fixed collider).
+struct Side {
+    RigidBodyState& s;
+    Vec3d invMass = Vec3d::Zero();  ///< per world axis; locked axes take no impulse
+    Mat3d invI = Mat3d::Zero();
+    Vec3d moveFree = Vec3d::Zero();
+
+    Side(RigidBodyState& state, const RigidBodyModel& m) : s(state) {
+        invMass = m.moveFree / m.mass;
+        const Mat3d turn = m.turnFree.asDiagonal();
+        invI = turn * m.worldInertia(s.orientation).inverse() * turn;
+        moveFree = m.moveFree;
+    }
+    explicit Side(RigidBodyState& fixed) : s(fixed) {}
+};
+
+/// Sequential impulses on the contacts between a and b (Catto 2006), equal and opposite on the two; then a and b
+/// are moved apart along the normals, by what is left of each contact's depth, in the ratio of their inverse
+/// masses. A contact that closes within the step at more than `restingSpeed` bounces: it seeks a separating speed
+/// its restitution times its approach (Newton's law of restitution), the approach without what the step's gravity
+/// added to it (`stepGravity`, the change gravity made in the relative velocity). Position-first Euler brings a body
+/// back to a height at g dt more than the speed it left at, so bouncing the approach with the step's gravity in it
+/// keeps a resting body hopping: at e g dt / (1 - e), beyond any fixed threshold as e nears 1. Returns the work the
+/// contacts' moving colliders did on a: each one's impulse times its velocity (zero between bodies).
+double solveContacts(Side a, Side b, std::vector<Contact>& contacts, double dt, double restingSpeed, const Vec3d& stepGravity) {
+    const auto push = [&](const Contact& c, const Vec3d& J) {
+        a.s.velocity += a.invMass.cwiseProduct(J);
+        a.s.spin += a.invI * c.ra.cross(J);
+        b.s.velocity -= b.invMass.cwiseProduct(J);
+        b.s.spin -= b.invI * c.rb.cross(J);
     };
+    // The effective inverse mass of the contact along a direction: what an impulse of 1 changes its velocity by.
+    const auto inverseMass = [&](const Contact& c, const Vec3d& d) {
+        return d.dot(a.invMass.cwiseProduct(d) + (a.invI * c.ra.cross(d)).cross(c.ra)) +
+               d.dot(b.invMass.cwiseProduct(d) + (b.invI * c.rb.cross(d)).cross(c.rb));
+    };
+    const auto relative = [&](const Contact& c) {
+        return Vec3d(a.s.velocity + a.s.spin.cross(c.ra) - b.s.velocity - b.s.spin.cross(c.rb) - c.vc);
+    };
+    for (Contact& c : contacts) {
+        // No approach beyond the gap the step may close; a contact met within the step at speed bounces.
+        c.target = c.depth < 0.0 ? c.depth / dt : 0.0;
+        const double approach = relative(c).dot(c.n), met = approach - stepGravity.dot(c.n);
+        if (c.restitution > 0.0 && met < -restingSpeed && approach * dt <= c.depth)
+            c.target = std::max(c.target, -c.restitution * met);
+    }
+    constexpr int kSweeps = 8;
+    for (int sweep = 0; sweep < kSweeps; ++sweep)
+        for (Contact& c : contacts) {
+            const double kn = inverseMass(c, c.n);
+            if (!(kn > 0.0)) continue;
+            // Normal: impulses only pushing (accumulated, clamped at 0).
+            const double normal = std::max(c.normal + (c.target - relative(c).dot(c.n)) / kn, 0.0);
+            push(c, (normal - c.normal) * c.n);
+            c.normal = normal;
+            // Friction: the sliding stopped, within the cone |T| <= mu N.
+            Vec3d vt = relative(c);
+            vt -= vt.dot(c.n) * c.n;
+            const double speed = vt.norm();
+            if (!(speed > 0.0)) continue;
+            const Vec3d dir = vt / speed;
+            const double kt = inverseMass(c, dir);
+            if (!(kt > 0.0)) continue;
+            Vec3d tangential = c.tangential - (speed / kt) * dir;
+            const double limit = c.mu * c.normal;
+            if (tangential.norm() > limit) tangential *= limit / tangential.norm();
+            push(c, tangential - c.tangential);
+            c.tangential = tangential;
+        }
+    // Apart along the normals, the deepest first in effect: each contact pushes what is left. Against a fixed
+    // collider only a's free axes move, so they alone count as pushed.
+    const bool fixedB = b.invMass.isZero();
+    Vec3d apart = Vec3d::Zero();
+    for (int sweep = 0; sweep < kSweeps; ++sweep)
+        for (const Contact& c : contacts) {
+            const double left = c.depth - apart.dot(c.n);
+            if (left > 0.0) apart += left * (fixedB ? c.n.cwiseProduct(a.moveFree) : c.n);
+        }
+    const double ka = apart.dot(a.invMass.cwiseProduct(apart)), kb = apart.dot(b.invMass.cwiseProduct(apart));
+    if (ka + kb > 0.0) {
+        a.s.centre += (ka / (ka + kb)) * apart.cwiseProduct(a.moveFree);
+        b.s.centre -= (kb / (ka + kb)) * apart.cwiseProduct(b.moveFree);
+    }
+    double work = 0.0;
+    for (const Contact& c : contacts) work += (c.normal * c.n + c.tangential).dot(c.vc);
+    return work;
+}
+
+/// An approach slower than one step's gravity, g dt, does not bounce: the hops of a bouncing body shrink by e each,
+/// and this ends them (as a real ball's end, in the time the step resolves).
+double restingSpeed(const Vec3d& gravity, double dt) { return gravity.norm() * dt; }
+
+double frictionOf(const Collider& c) {
+    return c.boundary() == Boundary::Sticky ? std::numeric_limits<double>::infinity() : double(c.friction());
+}
+
+}  // namespace
+
+int RigidBodyModel::touch(RigidBodyState& s, const std::vector<FixedCollider>& fixed, double t, double dt, const Vec3d& gravity,
+                          double& work) const {
+    work = 0.0;
     const Mat3d R = s.orientation.toRotationMatrix();
     std::vector<Contact> contacts;
     // Speculative contacts (points the next step could carry into a collider) keep a resting face on all its
@@ -65,61 +187,22 @@ int RigidBodyModel::touch(RigidBodyState& s, const std::vector<const Collider*>&
     for (std::size_t i = 0; i < contactPoints.size(); ++i) {
         const Vec3d p = s.centre + R * (contactPoints[i] - restCentre);
         const double radius = contactRadii[i];
-        for (const Collider* c : fixed) {
+        for (const FixedCollider& f : fixed) {
+            const Collider* c = f.collider;
             const double phi = c->signedDistance(p, t) - radius;
             if (!(phi < margin)) continue;
             const Vec3d n = c->normal(p, t);
             const Vec3d q = p - radius * n;
-            const double mu = c->boundary() == Boundary::Sticky ? std::numeric_limits<double>::infinity() : double(c->friction());
-            contacts.push_back(Contact{q - s.centre, n, c->velocity(q, t), -phi, mu});
+            Contact contact{.ra = q - s.centre, .rb = Vec3d::Zero(), .n = n, .depth = -phi, .mu = frictionOf(*c)};
+            contact.vc = c->velocity(q, t);
+            contact.restitution = std::max(restitution, f.restitution);
+            contacts.push_back(contact);
         }
     }
     if (contacts.empty()) return 0;
-    // Locked axes take no impulse: the inverse mass and inertia act on the free ones alone.
-    const Vec3d invMass = moveFree / mass;
-    const Mat3d turn = turnFree.asDiagonal();
-    const Mat3d invI = turn * worldInertia(s.orientation).inverse() * turn;
-    const auto push = [&](const Vec3d& r, const Vec3d& J) {
-        s.velocity += invMass.cwiseProduct(J);
-        s.spin += invI * r.cross(J);
-    };
-    // The effective inverse mass of a point along a direction: what an impulse of 1 there changes its velocity by.
-    const auto inverseMass = [&](const Vec3d& r, const Vec3d& d) {
-        return d.dot(invMass.cwiseProduct(d) + (invI * r.cross(d)).cross(r));
-    };
-    constexpr int kSweeps = 8;
-    for (int sweep = 0; sweep < kSweeps; ++sweep)
-        for (Contact& c : contacts) {
-            const auto relative = [&] { return Vec3d(s.velocity + s.spin.cross(c.r) - c.vc); };
-            const double kn = inverseMass(c.r, c.n);
-            if (!(kn > 0.0)) continue;
-            // Normal: no approach beyond the gap the step may close, impulses only pushing (accumulated, clamped at 0).
-            const double allowed = c.depth < 0.0 ? c.depth / dt : 0.0;
-            const double normal = std::max(c.normal + (allowed - relative().dot(c.n)) / kn, 0.0);
-            push(c.r, (normal - c.normal) * c.n);
-            c.normal = normal;
-            // Friction: the sliding stopped, within the cone |T| <= mu N.
-            Vec3d vt = relative();
-            vt -= vt.dot(c.n) * c.n;
-            const double speed = vt.norm();
-            if (!(speed > 0.0)) continue;
-            const Vec3d dir = vt / speed;
-            const double kt = inverseMass(c.r, dir);
-            if (!(kt > 0.0)) continue;
-            Vec3d tangential = c.tangential - (speed / kt) * dir;
-            const double limit = c.mu * c.normal;
-            if (tangential.norm() > limit) tangential *= limit / tangential.norm();
-            push(c.r, tangential - c.tangential);
-            c.tangential = tangential;
-        }
-    // Out of the colliders along their normals, the deepest first in effect: each contact pushes what is left.
-    Vec3d out = Vec3d::Zero();
-    for (int sweep = 0; sweep < kSweeps; ++sweep)
-        for (const Contact& c : contacts) {
-            const double left = c.depth - out.dot(c.n);
-            if (left > 0.0) out += left * c.n.cwiseProduct(moveFree);
-        }
-    s.centre += out;
+    RigidBodyState still;
+    work =
+        solveContacts(Side(s, *this), Side(still), contacts, dt, restingSpeed(gravity, dt), dt * gravity.cwiseProduct(moveFree));
     return int(contacts.size());
 }
 
@@ -131,21 +214,14 @@ double RigidBodyModel::extent() const {
 }
 
 int touchBodies(const RigidBodyModel& A, RigidBodyState& a, const Collider& colliderA, const RigidBodyModel& B, RigidBodyState& b,
-                const Collider& colliderB, double t, double dt) {
+                const Collider& colliderB, double t, double dt, const Vec3d& gravity) {
     // What can meet within the step: the bounding spheres closer than the distance the two may close in dt.
     const double closing =
         2.0 * dt * (a.velocity.norm() + b.velocity.norm() + a.spin.norm() * A.extent() + b.spin.norm() * B.extent());
     if ((a.centre - b.centre).norm() > A.extent() + B.extent() + closing) return 0;
-    struct Contact {
-        Vec3d ra, rb, n;  ///< from each centre to the contact point; the normal pointing from b to a
-        double depth;     ///< < 0: a gap the next step may close, no more
-        double normal = 0.0;
-        Vec3d tangential = Vec3d::Zero();
-    };
-    const auto mu = [](const Collider& c) {
-        return c.boundary() == Boundary::Sticky ? std::numeric_limits<double>::infinity() : double(c.friction());
-    };
-    const double friction = std::min(mu(colliderA), mu(colliderB));
+    const double friction = std::min(frictionOf(colliderA), frictionOf(colliderB));
+    // The bouncier of the two sets the pair's restitution (a rubber ball bounces off anything).
+    const double bounce = std::max(A.restitution, B.restitution);
     std::vector<Contact> contacts;
     // The samples of `from` against the shape of `into`; sign turns the normal so that it points from b to a.
     const auto sample = [&](const RigidBodyModel& M, const RigidBodyState& s, const Collider& into, double sign) {
@@ -156,65 +232,15 @@ int touchBodies(const RigidBodyModel& A, RigidBodyState& a, const Collider& coll
             if (!(phi < closing)) continue;
             const Vec3d n = into.normal(p, t);
             const Vec3d q = p - M.contactRadii[i] * n;
-            contacts.push_back(Contact{q - a.centre, q - b.centre, sign * n, -phi});
+            contacts.push_back(Contact{
+                .ra = q - a.centre, .rb = q - b.centre, .n = sign * n, .depth = -phi, .mu = friction, .restitution = bounce});
         }
     };
     sample(A, a, colliderB, 1.0);
     sample(B, b, colliderA, -1.0);
     if (contacts.empty()) return 0;
-    // Locked axes take no impulse.
-    const Vec3d invMassA = A.moveFree / A.mass, invMassB = B.moveFree / B.mass;
-    const Mat3d turnA = A.turnFree.asDiagonal(), turnB = B.turnFree.asDiagonal();
-    const Mat3d invIA = turnA * A.worldInertia(a.orientation).inverse() * turnA;
-    const Mat3d invIB = turnB * B.worldInertia(b.orientation).inverse() * turnB;
-    // J acts on a at ra, -J on b at rb.
-    const auto push = [&](const Contact& c, const Vec3d& J) {
-        a.velocity += invMassA.cwiseProduct(J);
-        a.spin += invIA * c.ra.cross(J);
-        b.velocity -= invMassB.cwiseProduct(J);
-        b.spin -= invIB * c.rb.cross(J);
-    };
-    const auto inverseMass = [&](const Contact& c, const Vec3d& d) {
-        return d.dot(invMassA.cwiseProduct(d) + (invIA * c.ra.cross(d)).cross(c.ra)) +
-               d.dot(invMassB.cwiseProduct(d) + (invIB * c.rb.cross(d)).cross(c.rb));
-    };
-    const auto relative = [&](const Contact& c) {
-        return Vec3d(a.velocity + a.spin.cross(c.ra) - b.velocity - b.spin.cross(c.rb));
-    };
-    constexpr int kSweeps = 8;
-    for (int sweep = 0; sweep < kSweeps; ++sweep)
-        for (Contact& c : contacts) {
-            const double kn = inverseMass(c, c.n);
-            if (!(kn > 0.0)) continue;
-            const double allowed = c.depth < 0.0 ? c.depth / dt : 0.0;
-            const double normal = std::max(c.normal + (allowed - relative(c).dot(c.n)) / kn, 0.0);
-            push(c, (normal - c.normal) * c.n);
-            c.normal = normal;
-            Vec3d vt = relative(c);
-            vt -= vt.dot(c.n) * c.n;
-            const double speed = vt.norm();
-            if (!(speed > 0.0)) continue;
-            const Vec3d dir = vt / speed;
-            const double kt = inverseMass(c, dir);
-            if (!(kt > 0.0)) continue;
-            Vec3d tangential = c.tangential - (speed / kt) * dir;
-            const double limit = friction * c.normal;
-            if (tangential.norm() > limit) tangential *= limit / tangential.norm();
-            push(c, tangential - c.tangential);
-            c.tangential = tangential;
-        }
-    // Apart along the normals, what is left of each contact's depth, shared by the inverse masses along it.
-    Vec3d apart = Vec3d::Zero();
-    for (int sweep = 0; sweep < kSweeps; ++sweep)
-        for (const Contact& c : contacts) {
-            const double left = c.depth - apart.dot(c.n);
-            if (left > 0.0) apart += left * c.n;
-        }
-    const double ka = apart.dot(invMassA.cwiseProduct(apart)), kb = apart.dot(invMassB.cwiseProduct(apart));
-    if (ka + kb > 0.0) {
-        a.centre += (ka / (ka + kb)) * apart.cwiseProduct(A.moveFree);
-        b.centre -= (kb / (ka + kb)) * apart.cwiseProduct(B.moveFree);
-    }
+    solveContacts(Side(a, A), Side(b, B), contacts, dt, restingSpeed(gravity, dt),
+                  dt * (gravity.cwiseProduct(A.moveFree) - gravity.cwiseProduct(B.moveFree)));
     return int(contacts.size());
 }
 

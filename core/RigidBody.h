@@ -14,15 +14,20 @@
 // every step, which the particle pass then squeezes. The scheme keeps E - dt M g . v / 2 in free flight (its
 // modified energy) where E = 1/2 M v^2 + 1/2 w . I w - M g . x gains M g^2 dt^2 / 2 a step: booked with E alone, a
 // body falling in air tripped the energy check where the material was light.
-// Locked axes (world axes) keep their velocity component at zero. Against the fixed colliders (those the scene moves,
-// or not at all) a body touches at sample points of its surface: inelastic contact with Coulomb friction by
-// sequential impulses (projected Gauss-Seidel over the contacts, a fixed number of sweeps in a fixed order, with
-// speculative contacts for points a step could carry in: Catto 2006, "Fast and Simple Physics using Sequential
-// Impulses"), then the body is moved out along the contacts' normals. Two bodies touch the same way, each one's
-// samples against the other's shape, with equal and opposite impulses (momentum kept) and the push out shared by
-// their inverse masses; the pairs are solved in collider order after the contacts with the fixed colliders.
+// An animated body (a motion and a release time) follows its motion until then as a prescribed collider (its work on
+// the material booked as any moving collider's; other bodies touch it as a fixed collider), then is a body from the
+// pose, velocity and spin the motion had. Locked axes (world axes) keep their velocity component at zero. Against the fixed
+// colliders (those the scene moves, or not at all) a body touches at sample points of its surface: contact with Newton's
+// restitution (none by default) and Coulomb friction by sequential impulses (projected Gauss-Seidel over the contacts, a fixed
+// number of sweeps in a fixed order, with speculative contacts for points a step could carry in: Catto 2006, "Fast and Simple
+// Physics using Sequential Impulses"); a contact bounces when the step closes it at more than one step's gravity
+// (slower, it rests), from where the step began (up to one step's travel early: the limit of speculative contacts);
+// then the body is moved out along the contacts' normals. Two bodies touch the same way, each one's samples against
+// the other's shape, with equal and opposite impulses (momentum kept) and the push out shared by their inverse
+// masses; the pairs are solved in collider order after the contacts with the fixed colliders.
 #include <array>
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "base/Types.h"
@@ -32,6 +37,13 @@
 namespace mpm {
 
 class Collider;
+
+/// A collider a body touches that the body cannot move: a fixed one (still or moving as the scene says), or an
+/// animated body while animated, with that body's restitution.
+struct FixedCollider {
+    const Collider* collider = nullptr;
+    double restitution = 0.0;
+};
 
 /// Where a body is and how it moves: what a checkpoint stores of it.
 struct RigidBodyState {
@@ -52,8 +64,17 @@ struct RigidBodyModel {
     Vec3d restCentre = Vec3d::Zero();   ///< centre of mass in the scene's placement [m]
     Vec3d moveFree = Vec3d::Ones();     ///< per world axis, 1 free or 0 locked
     Vec3d turnFree = Vec3d::Ones();
-    std::vector<Vec3d> contactPoints;  ///< surface samples in the scene's placement (core/shapes/MassProperties.h)
-    std::vector<double> contactRadii;  ///< per sample: the surface lies this far beyond it (a sphere's radius)
+    std::vector<Vec3d> contactPoints;         ///< surface samples in the scene's placement (core/shapes/MassProperties.h)
+    std::vector<double> contactRadii;         ///< per sample: the surface lies this far beyond it (a sphere's radius)
+    double restitution = 0.0;                 ///< of its contacts with colliders and bodies: separating over approaching speed
+    std::shared_ptr<const Motion> animation;  ///< followed until `release`; none: the material moves it from the start
+    double release = 0.0;                     ///< [s]
+
+    /// Whether a step starting at time t follows the animation (the body is prescribed: the material does not move it).
+    bool animatedAt(double t) const { return animation && t < release; }
+    /// Where the animation has it at time t, moving at the animation's velocity and spin there (at the release, those
+    /// just before it: what the body leaves with).
+    RigidBodyState animated(double t) const;
 
     /// The body at rest where the scene places it.
     RigidBodyState initial(const Vec3d& velocity, const Vec3d& spin) const;
@@ -64,9 +85,13 @@ struct RigidBodyModel {
     void accelerate(const RigidBodyState& start, RigidBodyState& s, double dt, const Vec3d& gravity, const Vec3d& J,
                     const Vec3d& L) const;
     /// Contact with the fixed colliders at time t, at the state's pose, before a next step of about dt: the
-    /// velocities change by the impulses of inelastic Coulomb contact (a point in a collider stops approaching it,
-    /// one outside may close its gap in dt, no more), and the body moves out of them. Returns the contacts.
-    int touch(RigidBodyState& s, const std::vector<const Collider*>& fixed, double t, double dt) const;
+    /// velocities change by the impulses of Coulomb contact (a point in a collider stops approaching it, one outside
+    /// may close its gap in dt, no more; one met at more than one step's gravity bounces back at `restitution` times
+    /// the speed it met it at, the step's gravity not counted; the larger of the two restitutions), and the body moves
+    /// out of them. Returns the contacts; `work` receives the work the colliders' motion did on the body (each contact's
+    /// impulse times the collider's velocity there: external, as a moving collider's on the material).
+    int touch(RigidBodyState& s, const std::vector<FixedCollider>& fixed, double t, double dt, const Vec3d& gravity,
+              double& work) const;
     /// The farthest a point of the body reaches from its centre of mass (contact samples with their radii).
     double extent() const;
     /// Kinetic plus gravitational energy (zero height at the origin, as the particles'), less dt M g . v / 2: the
@@ -84,12 +109,12 @@ struct RigidBodyModel {
 };
 
 /// Contact between bodies a and b at time t, at their states' poses, before a next step of about dt: a's samples
-/// against b's collider (its shape at b's pose) and b's against a's, inelastic with Coulomb friction (the smaller of
-/// the two colliders' coefficients; a sticky one counts as infinite), by sequential impulses equal and opposite on
-/// the two; then they are moved apart along the contacts' normals in the ratio of their inverse masses. The
-/// colliders must read the states' poses (their frames set from them). Returns the contacts.
+/// against b's collider (its shape at b's pose) and b's against a's, with the larger of the two restitutions and
+/// Coulomb friction (the smaller of the two colliders' coefficients; a sticky one counts as infinite), by sequential
+/// impulses equal and opposite on the two; then they are moved apart along the contacts' normals in the ratio of
+/// their inverse masses. The colliders must read the states' poses (their frames set from them). Returns the contacts.
 int touchBodies(const RigidBodyModel& A, RigidBodyState& a, const Collider& colliderA, const RigidBodyModel& B, RigidBodyState& b,
-                const Collider& colliderB, double t, double dt);
+                const Collider& colliderB, double t, double dt, const Vec3d& gravity);
 
 /// The impulse and angular impulse a body's collider passes gave the material, summed exactly (core/ExactSum.h),
 /// so that the body moves the same on any number of threads and ranks.

@@ -130,18 +130,34 @@ void Simulation::addBody(std::unique_ptr<Collider> c, const RigidBodyModel& mode
 }
 
 void Simulation::poseBodies(double dt) {
-    for (std::size_t k = 0; k < bodies_.size(); ++k)
-        *bodies_[k].frame = bodies_[k].model.frame(bodies_[k].model.moved(state_.bodies[k], dt));
+    for (std::size_t k = 0; k < bodies_.size(); ++k) {
+        const RigidBodyModel& model = bodies_[k].model;
+        const bool animated = model.animatedAt(state_.time);
+        *bodies_[k].frame = model.frame(animated ? model.animated(state_.time + dt) : model.moved(state_.bodies[k], dt));
+        bodies_[k].frame->released = !animated;
+    }
 }
 
 float Simulation::moveBodies(double dt, const std::vector<BodyImpulse>& nodes, const std::vector<BodyImpulse>& particles) {
     float fastest = 0.0f;
     if (bodies_.empty()) return fastest;
-    std::vector<const Collider*> fixed;
+    // What bodies touch that they cannot move: the colliders that are not bodies, and the bodies still animated.
+    std::vector<FixedCollider> fixed;
     for (const auto& c : colliders_)
-        if (!c->dynamic()) fixed.push_back(c.get());
+        if (!c->dynamic()) fixed.push_back(FixedCollider{c.get(), 0.0});
+    for (const Body& b : bodies_)
+        if (b.model.animatedAt(state_.time))
+            for (FixedCollider& f : fixed)
+                if (f.collider == colliders_[b.collider].get()) f.restitution = b.model.restitution;
     for (std::size_t k = 0; k < bodies_.size(); ++k) {
         const Body& b = bodies_[k];
+        if (b.model.animatedAt(state_.time)) {
+            // Prescribed: where its animation has it (the collider passes booked its work as a moving collider's).
+            state_.bodies[k] = b.model.animated(state_.time + dt);
+            *b.frame = b.model.frame(state_.bodies[k]);
+            b.frame->released = false;
+            continue;
+        }
         BodyImpulse taken;
         if (!nodes.empty()) taken += nodes[b.collider];
         if (!particles.empty()) taken += particles[b.collider];
@@ -155,7 +171,10 @@ float Simulation::moveBodies(double dt, const std::vector<BodyImpulse>& nodes, c
             next.orientation.normalize();
         } else {
             b.model.accelerate(s, next, dt, settings_.gravity, taken.impulse(), taken.angular());
-            b.model.touch(next, fixed, state_.time + dt, dt);
+            double wallWork = 0.0;
+            b.model.touch(next, fixed, state_.time + dt, dt, settings_.gravity, wallWork);
+            // A moving collider's push on the body is work from outside, as its push on the material is.
+            state_.energy.work += wallWork;
         }
         s = next;
         // The bodies belong to the checked system: what they lose, the material may gain.
@@ -167,10 +186,12 @@ float Simulation::moveBodies(double dt, const std::vector<BodyImpulse>& nodes, c
         for (std::size_t i = 0; i < bodies_.size(); ++i)
             for (std::size_t j = i + 1; j < bodies_.size(); ++j) {
                 const Body &a = bodies_[i], &b = bodies_[j];
+                // An animated body is one of the fixed colliders the other touched.
+                if (a.model.animatedAt(state_.time) || b.model.animatedAt(state_.time)) continue;
                 RigidBodyState &sa = state_.bodies[i], &sb = state_.bodies[j];
                 const double before = a.model.energy(sa, settings_.gravity, dt) + b.model.energy(sb, settings_.gravity, dt);
-                if (touchBodies(a.model, sa, *colliders_[a.collider], b.model, sb, *colliders_[b.collider], state_.time + dt,
-                                dt) == 0)
+                if (touchBodies(a.model, sa, *colliders_[a.collider], b.model, sb, *colliders_[b.collider], state_.time + dt, dt,
+                                settings_.gravity) == 0)
                     continue;
                 state_.energy.work -=
                     a.model.energy(sa, settings_.gravity, dt) + b.model.energy(sb, settings_.gravity, dt) - before;

@@ -55,7 +55,7 @@ FrameWriter FrameWriter::partWriter(const SceneDesc& scene, const SpeciesLayout&
 
 void FrameWriter::configure(const SceneDesc& scene) {
     for (std::size_t i = 0; i < scene.colliders.size(); ++i)
-        if (scene.colliders[i].dynamic.enabled) bodyColliders_.push_back(int(i));
+        if (scene.colliders[i].dynamic.enabled) bodyColliders_.push_back(int(i)), bodyNames_.push_back(scene.colliders[i].name);
     bodies_ = bodyColliders_.size();
     for (const ParticleSetDesc& d : scene.sets) attributes_.setColours.push_back(d.colour);
     // The surface resolves the particle spacing of the first set; the sphere radius is a multiple of it.
@@ -78,8 +78,8 @@ std::map<int, std::string> statsRows(const std::string& csv) {
     return rows;
 }
 
-std::string bodiesCsv(const std::string& statsCsv, const std::vector<int>& colliders) {
-    std::string out = "frame,time,body,collider,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n";
+std::string bodiesCsv(const std::string& statsCsv, const std::vector<int>& colliders, const std::vector<std::string>& names) {
+    std::string out = "frame,time,body,collider,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,name\n";
     const std::size_t numbers = RigidBodyState::kDoubles * colliders.size();
     std::istringstream in(statsCsv);
     std::string line;
@@ -102,7 +102,7 @@ std::string bodiesCsv(const std::string& statsCsv, const std::vector<int>& colli
         for (std::size_t k = 0; k < colliders.size(); ++k) {
             out += lead + "," + std::to_string(k) + "," + std::to_string(colliders[k]);
             for (std::size_t c = 0; c < RigidBodyState::kDoubles; ++c) out += "," + tail[k * RigidBodyState::kDoubles + c];
-            out += "\n";
+            out += "," + csvField(names[k]) + "\n";
         }
     }
     return out;
@@ -117,7 +117,7 @@ void FrameWriter::writeStats() {
         for (const auto& [frame, row] : rows) text += row + "\n";
     }
     writeTextAtomically(dir_ + "/stats.csv", text);
-    if (bodies_ > 0) writeTextAtomically(dir_ + "/bodies.csv", bodiesCsv(text, bodyColliders_));
+    if (bodies_ > 0) writeTextAtomically(dir_ + "/bodies.csv", bodiesCsv(text, bodyColliders_, bodyNames_));
 }
 
 FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, const std::string& directory,
@@ -185,6 +185,7 @@ void FrameWriter::writeFrame(int frame, const std::vector<AnySpecies>& species, 
             r.bodies.v.push_back(b.velocity.cast<float>());
             r.bodies.w.push_back(b.spin.cast<float>());
             r.bodies.collider.push_back(bodyColliders_[k]);
+            r.bodies.name.push_back(bodyNames_[k]);
         }
     const PointCloud cloud = gatherPoints(species, layout_.materialOfSpecies, attributes_);
     if (o.points || o.surface || o.density || o.velocity) writeVdbFrame(r, cloud);

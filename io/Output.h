@@ -44,10 +44,11 @@ private:
     OutputDesc output_;
     SpeciesLayout layout_;
     std::vector<SurfaceGroup> surfaces_;
-    PointAttributes attributes_;      ///< Cd per set and the extra attributes asked for
-    double particleSpacing_ = 0.0;    ///< what the surface resolves
-    std::size_t bodies_ = 0;          ///< dynamic colliders: their columns in stats.csv
-    std::vector<int> bodyColliders_;  ///< each body's collider, by its index in the scene's list
+    PointAttributes attributes_;          ///< Cd per set and the extra attributes asked for
+    double particleSpacing_ = 0.0;        ///< what the surface resolves
+    std::size_t bodies_ = 0;              ///< dynamic colliders: their columns in stats.csv
+    std::vector<int> bodyColliders_;      ///< each body's collider, by its index in the scene's list
+    std::vector<std::string> bodyNames_;  ///< and its name
     std::string dir_;
     std::string csv_;
     std::map<int, std::string> kept_;
@@ -61,9 +62,9 @@ private:
 };
 
 /// bodies.csv made from stats.csv's text: for each frame row and body k, "frame,time,body,collider," and the 13
-/// numbers of its body<k>_* columns (x, y, z, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz); `colliders[k]` is body k's
-/// index in the scene's collider list.
-std::string bodiesCsv(const std::string& statsCsv, const std::vector<int>& colliders);
+/// numbers of its body<k>_* columns (x, y, z, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz), then its name; `colliders[k]`
+/// is body k's index in the scene's collider list, `names[k]` its collider's name.
+std::string bodiesCsv(const std::string& statsCsv, const std::vector<int>& colliders, const std::vector<std::string>& names);
 
 /// The rows of a stats.csv by frame, the header left out (an empty map for a missing or empty file).
 std::map<int, std::string> statsRows(const std::string& csv);

@@ -112,6 +112,18 @@ std::string readTextFile(const std::string& path) {
     return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
+/// The identity of a checkpoint's scene as this version reads it: its scene read again, so that keys added to the
+/// format since it was written come in at their defaults. A key is added with the default that keeps what the engine
+/// did before it, so a checkpoint whose scene differs only by such keys is of this scene, and resumes. A scene this
+/// version no longer reads keeps its identity as stored (and differs).
+std::string identityToday(const std::string& stored, const std::string& file) {
+    try {
+        return sceneIdentity(parseScene(stored, file).resolvedJson);
+    } catch (const SceneError&) {
+        return stored;
+    }
+}
+
 /// Rank 0 alone: the output directory is its to write.
 template <class F>
 void onRoot(const Comm& comm, F&& fn) {
@@ -125,7 +137,7 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     // Budgets before work: a scene that cannot run here fails now, with the estimate and what to change.
     const SceneBudget budget = estimateBudget(scene_, false, Comm::world().size());
     checkBudget(scene_, budget);
-    neededBytes_ = budget.memoryBytes, machineBytes_ = budget.machineBytes;
+    neededBytes_ = budget.memoryBytes, machineBytes_ = budget.machineBytes, machineHolder_ = budget.machineHolder;
     last_ = options_.lastFrame < 0 ? scene_.frames : options_.lastFrame;
     // Files are counted from 1; 0 names the initial state, whose file output.initial_frame writes.
     if (options_.framesGiven && (last_ > scene_.frames || options_.firstFrame > scene_.frames))
@@ -239,7 +251,7 @@ void SceneRun::guarded(const std::string& what, F&& f) {
         msg.precision(3);
         msg << "out of memory while " << what << " with " << (sim_ ? sim_->particleCount() : 0)
             << " particles (the scene needs about " << neededBytes_ / double(1u << 30)
-            << " GiB at its peak by validate's estimate; this machine has " << machineBytes_ / double(1u << 30)
+            << " GiB at its peak by validate's estimate; " << machineHolder_ << " " << machineBytes_ / double(1u << 30)
             << " GiB, less what other programs and the process's limits (ulimit -v) leave)";
         throw LimitExceeded(msg.str());
     }
@@ -327,10 +339,10 @@ void SceneRun::chooseStart() {
         bool share = false;
         std::string path;
         if (!readCheckpointOf(files, c, share, path)) continue;
-        if (c.info.sceneHash != hash_) {
+        const std::string before = c.info.sceneHash == hash_ ? identity_ : identityToday(c.info.sceneJson, scene_.file);
+        if (before != identity_) {
             std::string changes;
-            for (const std::string& d : sceneDifferences(c.info.sceneJson, identity_))
-                changes += (changes.empty() ? "" : "; ") + d;
+            for (const std::string& d : sceneDifferences(before, identity_)) changes += (changes.empty() ? "" : "; ") + d;
             if (options_.resume && !options_.force)
                 throw SceneError(scene_.file + ": the scene changed since " + path + " was written (" + changes +
                                  "); run without --resume to start over, or add --force to resume anyway");

@@ -106,6 +106,7 @@ private:
     /// What the scene was estimated to need (for the message when an allocation fails: made before, as then
     /// there may be no memory to estimate it).
     double neededBytes_ = 0.0, machineBytes_ = 0.0;
+    std::string machineHolder_ = "this machine has";  ///< what sets machineBytes_, in words
     RunOptions options_;
     RunEvents events_;
     std::string dir_;

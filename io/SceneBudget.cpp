@@ -97,7 +97,53 @@ std::string duration(double seconds) {
 
 }  // namespace
 
-double machineMemoryBytes() { return double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE)); }
+double cgroupMemoryLimit(const std::string& procCgroup, const std::string& root, std::string& where) {
+    double least = std::numeric_limits<double>::infinity();
+    // A limit file's number ("max", or v1's page-rounded 2^63, when there is none).
+    const auto limitIn = [&](const std::string& file) {
+        std::ifstream in(file);
+        std::string word;
+        if (!(in >> word) || word == "max") return;
+        try {
+            const double bytes = std::stod(word);
+            if (bytes > 0.0 && bytes < least) least = bytes, where = file;
+        } catch (const std::exception&) {
+            // Not a number: no limit we can read.
+        }
+    };
+    std::istringstream lines(procCgroup);
+    for (std::string line; std::getline(lines, line);) {
+        // "hierarchy-ID:controllers:path": v2 has ID 0 and no controllers; v1's memory controller names "memory".
+        const std::size_t a = line.find(':'), b = line.find(':', a + 1);
+        if (a == std::string::npos || b == std::string::npos) continue;
+        const std::string controllers = line.substr(a + 1, b - a - 1);
+        std::string dir = line.substr(b + 1);
+        const bool v2 = controllers.empty(), v1 = !v2 && ("," + controllers + ",").find(",memory,") != std::string::npos;
+        if (!v1 && !v2) continue;
+        const std::string base = root + (v1 ? "/memory" : "");
+        const std::string file = v1 ? "/memory.limit_in_bytes" : "/memory.max";
+        // The group and each one above it: a limit anywhere up the tree caps this process.
+        for (;;) {
+            limitIn(base + (dir == "/" ? "" : dir) + file);
+            if (dir.empty() || dir == "/") break;
+            const std::size_t up = dir.rfind('/');
+            dir = up == 0 || up == std::string::npos ? "/" : dir.substr(0, up);
+        }
+    }
+    return least;
+}
+
+MemoryLimit memoryLimit() {
+    MemoryLimit m{double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE)), "this machine has"};
+    std::ifstream in("/proc/self/cgroup");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string where;
+    const double group = cgroupMemoryLimit(text, "/sys/fs/cgroup", where);
+    if (group < m.bytes) m = MemoryLimit{group, "its control group allows (" + where + ")"};
+    return m;
+}
+
+double machineMemoryBytes() { return memoryLimit().bytes; }
 
 double addressSpaceLeft() {
     rlimit limit{};
@@ -218,7 +264,9 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
     // Every rank holds every collider's field whole.
     for (std::size_t i = 0; i < scene.colliders.size(); ++i) b.colliderBytes += colliderFieldBytes(scene, i);
     b.memoryBytes += b.colliderBytes;
-    b.machineBytes = machineMemoryBytes();
+    const MemoryLimit limit = memoryLimit();
+    b.machineBytes = limit.bytes;
+    b.machineHolder = limit.holder;
     if (b.memoryBytes > b.machineBytes)
         b.problems.push_back(
             "/sets: " +
@@ -228,8 +276,8 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
                                                         : ")")
                                   : "the run") +
             " needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) + " particles" +
-            (b.colliderBytes > 0.0 ? " and " + gib(b.colliderBytes) + " of collider distance fields" : "") +
-            ", and this machine has " + gib(b.machineBytes) +
+            (b.colliderBytes > 0.0 ? " and " + gib(b.colliderBytes) + " of collider distance fields" : "") + ", and " +
+            b.machineHolder + " " + gib(b.machineBytes) +
             "; use fewer particles (particles_per_cell, count, duration) or a larger dx" +
             (b.colliderBytes > 0.0 ? ", or a coarser voxel_size for mesh colliders" : ""));
     return b;
@@ -243,7 +291,7 @@ std::string describeBudget(const SceneBudget& b) {
           << "\n";
     s << "memory: about " << gib(b.memoryBytes) << " at the peak (" << (long long)b.peakParticles << " particles";
     if (b.colliderBytes > 0.0) s << ", and " << gib(b.colliderBytes) << " of collider distance fields";
-    s << "); this machine has " << gib(b.machineBytes) << "\n";
+    s << "); " << b.machineHolder << " " << gib(b.machineBytes) << "\n";
     s << "substeps per frame: about " << b.substepsPerFrame << " at the start (dt = " << b.dt << " s, set by " << b.stepCause
       << ")\n";
     if (b.runSeconds > 0.0) s << "run time: about " << duration(b.runSeconds) << " here (" << b.runBasis << ")\n";

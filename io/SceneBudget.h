@@ -21,20 +21,32 @@ struct SetBudget {
 
 struct SceneBudget {
     std::vector<SetBudget> sets;
-    double peakParticles = 0.0;         ///< once every emission is done
-    double memoryBytes = 0.0;           ///< peak, estimated, the colliders' fields included
-    double colliderBytes = 0.0;         ///< the distance fields of the colliders read from files
-    double machineBytes = 0.0;          ///< physical memory of this machine
-    double substepsPerFrame = 0.0;      ///< at the start
-    double dt = 0.0;                    ///< the first step
-    std::string stepCause;              ///< what bounds it
+    double peakParticles = 0.0;                      ///< once every emission is done
+    double memoryBytes = 0.0;                        ///< peak, estimated, the colliders' fields included
+    double colliderBytes = 0.0;                      ///< the distance fields of the colliders read from files
+    double machineBytes = 0.0;                       ///< the memory this process may use (io/SceneBudget.h, memoryLimit)
+    std::string machineHolder = "this machine has";  ///< what sets it, in words
+    double substepsPerFrame = 0.0;                   ///< at the start
+    double dt = 0.0;                                 ///< the first step
+    std::string stepCause;                           ///< what bounds it
     double particleSubsteps = 0.0;      ///< the work of the whole run: each particle's substeps, at the first step's rate
     double runSeconds = 0.0;            ///< the run's expected length on this machine (io/RunEstimate.h); 0: not estimated
     std::string runBasis;               ///< what runSeconds comes from, in words
     std::vector<std::string> problems;  ///< each "/json/path: what is wrong; what to change"
 };
 
-/// Physical memory of this machine [bytes].
+/// What memory this process may use: the machine's, or less where a control group caps it (a container, a batch
+/// job's slot), and the words that say which.
+struct MemoryLimit {
+    double bytes = 0.0;
+    std::string holder;  ///< "this machine has" or "its control group <path> allows"
+};
+MemoryLimit memoryLimit();
+/// The smallest memory limit of the control group a /proc/<pid>/cgroup text names and of every group above it,
+/// read under `root` (/sys/fs/cgroup): cgroup v2's memory.max, or v1's memory/memory.limit_in_bytes. Infinite where
+/// none is set; `where` receives the group that sets it.
+double cgroupMemoryLimit(const std::string& procCgroup, const std::string& root, std::string& where);
+/// The memory this process may use [bytes]: memoryLimit().bytes.
 double machineMemoryBytes();
 /// Address space this process may still map under its limit (ulimit -v) [bytes]; infinite without a limit.
 double addressSpaceLeft();

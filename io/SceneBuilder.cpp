@@ -14,6 +14,7 @@
 #include "core/ExactSum.h"
 #include "core/LevelSetGeometry.h"
 #include "core/LevelSetSequence.h"
+#include "core/shapes/Polyhedron.h"
 #include "io/LevelSets.h"
 #include "io/MeshThickness.h"
 #include "io/PointFile.h"
@@ -98,6 +99,8 @@ struct FieldNotes {
     Vec3d centre = Vec3d::Zero();
     double voxel = 0.0;
     std::string warning;
+    bool keepMesh = false;  ///< asked for a body: the mesh as placed, which must be closed, for its mass properties
+    TriangleMesh mesh;
 };
 
 /// How far a mesh's distance field reaches outside and inside its surface [m]: outside past a leaf's half diagonal
@@ -112,8 +115,8 @@ MeshBand meshBand(double dx, double voxel) {
     return MeshBand{kExteriorCells * dx + kExteriorVoxels * voxel, levelSetBand(dx)};
 }
 
-/// A mesh whose vertices lie beyond the grid's coordinate range, or whose distance field would not fit in this
-/// machine's memory (a scale or a unit given by mistake: a 0.1 m part scaled by 1e6), is refused before OpenVDB
+/// A mesh whose vertices lie beyond the grid's coordinate range, or whose distance field would not fit in the memory
+/// this process may use (a scale or a unit given by mistake: a 0.1 m part scaled by 1e6), is refused before OpenVDB
 /// tries to build the field, naming what to change.
 void refuseFieldTooLarge(const SceneDesc& scene, const std::string& where, const MeshShape& m, const MeshField& f, double band) {
     const std::string at = scene.file + ": " + where + "/file: " + m.file;
@@ -130,7 +133,8 @@ void refuseFieldTooLarge(const SceneDesc& scene, const std::string& where, const
     }
     // OpenVDB builds the field in its worker threads, where running out of memory ends the program (std::terminate)
     // instead of reaching our handler: so the field must also fit what this process may still map (ulimit -v).
-    const double bytes = meshFieldBytes(f.mesh, f.voxel, band), machine = machineMemoryBytes(), mappable = addressSpaceLeft();
+    const MemoryLimit limit = memoryLimit();
+    const double bytes = meshFieldBytes(f.mesh, f.voxel, band), machine = limit.bytes, mappable = addressSpaceLeft();
     if (bytes > std::min(machine, mappable)) {
         std::ostringstream e;
         e.precision(3);
@@ -139,7 +143,7 @@ void refuseFieldTooLarge(const SceneDesc& scene, const std::string& where, const
         if (mappable < machine)
             e << "this process may map " << mappable / double(1u << 30) << " GiB more (its address-space limit, ulimit -v)";
         else
-            e << "this machine has " << machine / double(1u << 30) << " GiB";
+            e << limit.holder << " " << machine / double(1u << 30) << " GiB";
         e << "; check the mesh's units and transform.scale (" << m.transform.scale << "), or set a coarser voxel_size";
         throw SceneError(e.str());
     }
@@ -151,6 +155,9 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
                                            bool place = true, bool solidOutside = false, FieldNotes* notes = nullptr) {
     const double dx = scene.settings.dx / (place ? 1.0 : m.transform.scale);
     const MeshField f = meshField(scene, where, m, place, solidOutside);
+    if (const std::size_t open = notes && notes->keepMesh ? f.mesh.openEdges() : 0; open > 0)
+        throw SceneError(scene.file + ": " + where + "/file: " + m.file + ": a rigid body's mesh must be closed (watertight); " +
+                         std::to_string(open) + " of its edges border one triangle only");
     if (notes) {
         // The centre of the mesh's own box: exact, where the field's box is rounded to voxels and wider by its band.
         Eigen::AlignedBox3d box;
@@ -158,6 +165,7 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
         notes->centre = box.center();
         notes->voxel = f.voxel;
         if (place && !resolves(f.voxel, f.wall.thinnest)) notes->warning = thinWallWarning(scene, where, m, f);
+        if (notes->keepMesh) notes->mesh = f.mesh;
     }
     const MeshBand band = meshBand(dx, f.voxel);
     refuseFieldTooLarge(scene, where, m, f, band.width(m));
@@ -234,22 +242,49 @@ struct BodySpec {
     std::shared_ptr<BodyFrame> frame;
 };
 
-/// The rigid body a shape with closed-form mass properties makes (core/shapes/MassProperties.h).
-BodySpec bodyOf(const DynamicDesc& d, const MassProperties& props) {
+/// A mesh body touches colliders at its vertices and at points on its faces this many to its largest side: twice a
+/// box's (core/shapes/MassProperties.h), a mesh's faces being curved where a box's are flat.
+constexpr double kMeshContactSamplesPerSide = 8.0;
+
+/// The rigid body of these mass properties (a shape's closed form, core/shapes/MassProperties.h, or a closed mesh's).
+BodySpec bodyOf(const DynamicDesc& d, const MassProperties& props, std::shared_ptr<const Motion> animation) {
     BodySpec b;
     b.model.mass = d.mass > 0.0 ? d.mass : d.density * props.volume;
     b.model.inertia = props.inertia * (b.model.mass / props.volume);
     b.model.restCentre = props.centre;
     b.model.contactPoints = props.contactPoints;
     b.model.contactRadii = props.contactRadii;
+    b.model.restitution = d.restitution;
     for (int a = 0; a < 3; ++a) {
         const char axis = char('x' + a);
         b.model.moveFree[a] = d.lockTranslation.find(axis) == std::string::npos ? 1.0 : 0.0;
         b.model.turnFree[a] = d.lockRotation.find(axis) == std::string::npos ? 1.0 : 0.0;
     }
-    b.initial = b.model.initial(d.velocity, d.angularVelocity);
+    if (animation) b.model.animation = std::move(animation), b.model.release = d.animatedUntil;
+    b.initial = b.model.animation ? b.model.animated(0.0) : b.model.initial(d.velocity, d.angularVelocity);
     b.frame = std::make_shared<BodyFrame>(b.model.frame(b.initial));
     return b;
+}
+
+/// What is worth a word about an animated body: keys that end before its release (it leaves them at rest), or a
+/// release after the scene's last frame (it never leaves them).
+void animationWarnings(const SceneDesc& scene, const std::string& where, const ColliderDesc& c,
+                       std::vector<std::string>& warnings) {
+    const double fps = scene.settings.fps, release = c.dynamic.animatedUntil;
+    const auto say = [&](const auto&... parts) {
+        std::ostringstream w;
+        w.precision(4);
+        w << scene.file << ": " << where << "/dynamic/animated_until: " << release << " s (frame " << release * fps << ") ";
+        (w << ... << parts);
+        warnings.push_back(w.str());
+    };
+    double last = -1.0;
+    for (const KeyframeDesc& k : c.motion.keyframes) last = std::max(last, k.frame);
+    if (last >= 0.0 && last / fps < release)
+        say("is after the motion's last key (frame ", last, ", ", last / fps,
+            " s), where it is held: the body leaves its animation at rest");
+    if (release >= scene.frames / fps)
+        say("is not before the scene's end (frame ", scene.frames, "): the body never leaves its animation");
 }
 
 /// Collider `index`; `pivot`, if given, receives the pivot its motion turns about (the scene's, or its centre), and
@@ -268,12 +303,43 @@ std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, 
     return std::visit(
         [&]<class S>(const S& shape) -> std::unique_ptr<Collider> {
             if (c.dynamic.enabled) {
-                if constexpr (requires { shape.massProperties(); }) {
-                    BodySpec spec = bodyOf(c.dynamic, shape.massProperties());
-                    if (pivot) *pivot = spec.model.restCentre;
-                    auto collider = analyticCollider(shape, c.boundary, c.friction, Motion::dynamic(spec.frame));
+                // The body of these mass properties, its collider made by `collider` from the motion that poses it. An
+                // animated body's motion turns about its pivot, as a moving collider's (`centre` by default).
+                const auto makeBody = [&](const MassProperties& props, const Vec3d& centre,
+                                          const auto& collider) -> std::unique_ptr<Collider> {
+                    std::shared_ptr<const Motion> animation;
+                    if (c.dynamic.animatedUntil > 0.0) {
+                        animation = std::make_shared<const Motion>(motion(centre));
+                        if (warnings) animationWarnings(scene, where, c, *warnings);
+                    }
+                    BodySpec spec = bodyOf(c.dynamic, props, animation);
+                    if (pivot && !animation) *pivot = spec.model.restCentre;
+                    auto made = collider(Motion::dynamic(spec.frame, animation));
                     if (body) *body = std::move(spec);
-                    return collider;
+                    return made;
+                };
+                if constexpr (requires { shape.massProperties(); }) {
+                    return makeBody(shape.massProperties(), shape.middle(),
+                                    [&](Motion m) { return analyticCollider(shape, c.boundary, c.friction, std::move(m)); });
+                } else if constexpr (requires { S::kBodyFromFile; }) {
+                    const std::string at = scene.file + ": " + where;
+                    if (shape.thickness > 0.0)
+                        throw SceneError(at + "/thickness: a mesh body is a closed solid; leave thickness out");
+                    FieldNotes notes;
+                    notes.keepMesh = true;
+                    const auto ls = levelSetOf(scene, where, shape, true, false, &notes);
+                    if (warnings && !notes.warning.empty()) warnings->push_back(notes.warning);
+                    if (voxel) *voxel = notes.voxel;
+                    Eigen::AlignedBox3d box;
+                    for (const Vec3d& p : notes.mesh.points) box.extend(p);
+                    const MassProperties props = polyhedronMassProperties(notes.mesh.points, notes.mesh.triangles,
+                                                                          box.sizes().maxCoeff() / kMeshContactSamplesPerSide);
+                    if (!(props.volume > 0.0))
+                        throw SceneError(at + "/file: " + shape.file + ": the mesh encloses no volume to be a rigid body of");
+                    return makeBody(props, notes.centre, [&](Motion m) {
+                        return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction,
+                                                                                 std::move(m), false);
+                    });
                 } else {
                     throw SceneError(scene.file + ": " + where + "/dynamic: a " + S::kType +
                                      " collider cannot be a rigid body yet; the shapes that can: " + bodyShapeNames());
@@ -909,7 +975,8 @@ std::string resolvedWithDerived(const SceneDesc& scene, const DerivedValues& der
             mesh && mesh->voxelSize <= 0.0 && i < derived.colliderVoxel.size() && derived.colliderVoxel[i] > 0.0)
             j["colliders"][i]["voxel_size"] = derived.colliderVoxel[i];
         const MotionDesc& m = scene.colliders[i].motion;
-        if (scene.colliders[i].dynamic.enabled) continue;  // moved by the material: no pivot to state
+        // Moved by the material from the start: no pivot to state.
+        if (scene.colliders[i].dynamic.enabled && scene.colliders[i].dynamic.animatedUntil <= 0.0) continue;
         nlohmann::ordered_json& motion = j["colliders"][i]["motion"];
         if (!m.pivotGiven) motion = withKey(motion, "pivot", array(derived.colliderPivot[i]), "keyframes");
         for (std::size_t k = 0; k < m.keyframes.size(); ++k)

@@ -64,9 +64,12 @@ struct DynamicDesc {
     double mass = 0.0;  ///< > 0: replaces density times the shape's volume
     Vec3d velocity = Vec3d::Zero(), angularVelocity = Vec3d::Zero();
     std::string lockTranslation = "none", lockRotation = "none";  ///< world axes held still: none, x, y, z, xy, ...
+    double restitution = 0.0;                                     ///< of its contacts with colliders and other bodies
+    double animatedUntil = 0.0;                                   ///< > 0: it follows the collider's motion until then [s]
 };
 
 struct ColliderDesc {
+    std::string name;  ///< unique among the colliders
     ColliderShape shape;
     Boundary boundary = Boundary::Separate;
     float friction = 0.0f;

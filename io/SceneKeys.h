@@ -321,13 +321,18 @@ inline const std::vector<std::string>& kAxisLocks() {
     return locks;
 }
 
-/// The `type` names of the collider shapes a rigid body can be, "sphere, box, cylinder": those whose mass, centre of
-/// mass and inertia come in closed form (massProperties, core/shapes/MassProperties.h).
+/// The `type` names of the collider shapes a rigid body can be, "sphere, box, cylinder, mesh": those whose mass,
+/// centre of mass and inertia come in closed form (massProperties, core/shapes/MassProperties.h), and those whose file
+/// gives them (kBodyFromFile: a closed mesh, core/shapes/Polyhedron.h).
 inline const std::string& bodyShapeNames() {
     static const std::string names = []<class... S>(std::variant<S...>*) {
         std::string n;
         const auto add = [&n](const char* type) { n += (n.empty() ? "" : ", ") + std::string(type); };
-        ((requires(const S& s) { s.massProperties(); } ? add(S::kType) : void()), ...);
+        (((
+              requires(const S& s) { s.massProperties(); } || requires { S::kBodyFromFile; })
+              ? add(S::kType)
+              : void()),
+         ...);
         return n;
     }(static_cast<ColliderShape*>(nullptr));
     return names;
@@ -357,11 +362,32 @@ void dynamicKeys(V& v, DynamicDesc& d) {
              d.lockTranslation, kAxisLocks());
     v.choice(Key{.name = "lock_rotation", .help = "world axes about which it does not turn", .noun = "axis lock"}, d.lockRotation,
              kAxisLocks());
+    v.number(Key{.name = "restitution",
+                 .help = "of its contacts with colliders and other bodies (the larger of two bodies' counts): the speed it "
+                         "leaves a contact at over the speed it met it; 0 stops, 1 bounces back whole (not with the material, "
+                         "whose contact is the grid's)",
+                 .lo = 0.0,
+                 .hi = 1.0},
+             d.restitution);
+    v.number(Key{.name = "animated_until",
+                 .help = "with the collider's motion: it follows that motion until this time (in seconds: keyframe f is at "
+                         "f / fps), moving the material without being moved by it (an animated rigid body, as Blender and "
+                         "Houdini have them), then gravity and the material move it on from the velocity and spin the motion "
+                         "had just before (held after its last key: at rest)",
+                 .lo = 0.0,
+                 .hi = 1e9,
+                 .unit = "s"},
+             d.animatedUntil);
 }
 
 /// The keys every collider has besides its shape's.
 template <class V>
 void colliderKeys(V& v, ColliderDesc& c) {
+    v.text(Key{.name = "name",
+               .help = "unique name among the colliders (a rigid body's `name` in each frame's bodies grid and in bodies.csv)",
+               .byDefault = "collider<i>, i its index"},
+           c.name);
+    v.check(!c.name.empty(), "name", "must not be empty (Houdini matches bodies by it)");
     v.choice(Key{.name = "boundary",
                  .help = "separate: remove the normal velocity only when moving in (material leaves a wall it is not pressed "
                          "against); slip: remove it both ways (holds material on the wall, in tension too; with friction it lets "
@@ -377,14 +403,22 @@ void colliderKeys(V& v, ColliderDesc& c) {
     v.flag(Key{.name = "inside", .help = "keep material inside it (a tank, a glass, a drum) instead of outside"}, c.inside);
     v.object(Key{.name = "motion", .help = "how it moves (none: static)"}, [&](auto& m) { motionKeys(m, c.motion); });
     c.dynamic.enabled = v.given("dynamic");
-    static const std::string dynamicHelp =
-        "makes it a rigid body the material moves, under gravity (" + bodyShapeNames() + "; not with motion or inside)";
+    static const std::string dynamicHelp = "makes it a rigid body the material moves, under gravity (" + bodyShapeNames() +
+                                           "; not inside, and with a motion only until animated_until)";
     v.object(
         Key{.name = "dynamic", .help = dynamicHelp, .byDefault = "absent: it moves only as its motion says", .derived = true},
         [&](auto& d) { dynamicKeys(d, c.dynamic); });
     const MotionDesc& m = c.motion;
-    v.check(!c.dynamic.enabled || (m.velocity.isZero() && m.angularVelocity.isZero() && m.keyframes.empty() && !m.pivotGiven),
-            "dynamic", "a body the material moves takes no motion (its velocity is dynamic/velocity); give one or the other");
+    const bool moves = !(m.velocity.isZero() && m.angularVelocity.isZero() && m.keyframes.empty() && !m.pivotGiven);
+    const bool animated = c.dynamic.enabled && c.dynamic.animatedUntil > 0.0;
+    v.check(!c.dynamic.enabled || !moves || animated, "dynamic",
+            "a body the material moves follows a motion only until dynamic/animated_until, a time after 0 s; give that "
+            "time, or leave out the motion (a body's initial velocity is dynamic/velocity)");
+    v.check(!animated || moves, "dynamic",
+            "animated_until: the collider has no motion to follow until then; give it a motion, or leave animated_until out");
+    v.check(!animated || (c.dynamic.velocity.isZero() && c.dynamic.angularVelocity.isZero()), "dynamic",
+            "an animated body leaves its animation at the motion's velocity and spin; leave out dynamic/velocity and "
+            "angular_velocity");
     v.check(!c.dynamic.enabled || !c.inside, "dynamic", "a body the material moves keeps material outside it; leave out inside");
 }
 

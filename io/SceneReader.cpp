@@ -268,10 +268,15 @@ void readSet(JsonKeys& n, std::size_t index, SceneDesc& scene) {
 
 void readCollider(JsonKeys& n, SceneDesc& scene) {
     ColliderDesc c;
+    c.name = "collider" + std::to_string(scene.colliders.size());
     std::string type = Plane::kType;
     n.choice(Key{.name = "type", .noun = "collider"}, type, shapeTypeNames(&c.shape));
     shapeOfType(type, c.shape);
     colliderKeys(n, c);
+    for (std::size_t k = 0; k < scene.colliders.size(); ++k)
+        if (scene.colliders[k].name == c.name)
+            n.fail("name", "duplicate collider name \"" + c.name + "\": collider " + std::to_string(k) + " has it" +
+                               (n.has("name") ? "" : " (it is this collider's default name: give this one a name)"));
     std::visit([&]<class S>(S& s) { S::keys(n, s); }, c.shape);
     n.finish();
     scene.colliders.push_back(std::move(c));

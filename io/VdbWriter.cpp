@@ -2,6 +2,7 @@
 
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
+#include <openvdb/points/AttributeArrayString.h>
 #include <openvdb/points/PointConversion.h>
 #include <openvdb/points/PointCount.h>
 #include <openvdb/points/PointGroup.h>
@@ -53,6 +54,24 @@ void addAttribute(PointDataGrid& grid, const openvdb::tools::PointIndexGrid& ind
     const ArrayView<VdbT, T> view{values};
     openvdb::points::populateAttribute<openvdb::points::PointDataTree, openvdb::tools::PointIndexTree>(grid.tree(), index.tree(),
                                                                                                        name, view);
+}
+
+/// A string attribute: the strings go into the grid's descriptor (as Houdini stores them), each point its index.
+void addStringAttribute(PointDataGrid& grid, const openvdb::tools::PointIndexGrid& index, const char* name,
+                        const std::vector<std::string>& values) {
+    openvdb::points::appendAttribute<std::string>(grid.tree(), name);
+    auto leaf = grid.tree().beginLeaf();
+    if (!leaf) return;
+    openvdb::MetaMap& strings = openvdb::points::makeDescriptorUnique(grid.tree())->getMetadata();
+    openvdb::points::StringMetaInserter inserter(strings);
+    for (const std::string& v : values) inserter.insert(v);
+    for (; leaf; ++leaf) {
+        // The points of a leaf are stored in its index leaf's order.
+        const auto* order = index.tree().probeConstLeaf(leaf->origin());
+        if (!order) continue;
+        openvdb::points::StringAttributeWriteHandle handle(leaf->attributeArray(name), strings);
+        for (std::size_t n = 0; n < order->indices().size(); ++n) handle.set(openvdb::Index(n), values[order->indices()[n]]);
+    }
 }
 
 /// A point group name Houdini accepts (letters, digits and underscores) for a material or set name: other
@@ -127,6 +146,7 @@ PointDataGrid::Ptr makeBodies(const BodyPoints& b, double voxelSize) {
     addAttribute<openvdb::Vec3s>(*grid, *index, "v", b.v);
     addAttribute<openvdb::Vec3s>(*grid, *index, "w", b.w);
     addAttribute<int32_t>(*grid, *index, "collider", b.collider);
+    addStringAttribute(*grid, *index, "name", b.name);
     grid->setName("bodies");
     return grid;
 }
@@ -307,6 +327,11 @@ BodyPoints readVdbBodies(const std::string& path) {
         openvdb::points::AttributeHandle<openvdb::math::Quats> orient(leaf->constAttributeArray("orient"));
         openvdb::points::AttributeHandle<openvdb::Vec3f> v(leaf->constAttributeArray("v")), w(leaf->constAttributeArray("w"));
         openvdb::points::AttributeHandle<int32_t> collider(leaf->constAttributeArray("collider"));
+        const openvdb::points::AttributeArray* names = leaf->attributeSet().getConst("name");
+        std::unique_ptr<openvdb::points::StringAttributeHandle> name;
+        if (names)
+            name =
+                std::make_unique<openvdb::points::StringAttributeHandle>(*names, leaf->attributeSet().descriptor().getMetadata());
         for (auto it = leaf->beginIndexOn(); it; ++it) {
             const openvdb::Vec3d world = grid->transform().indexToWorld(P.get(*it) + it.getCoord().asVec3d());
             out.x.emplace_back(world[0], world[1], world[2]);
@@ -316,6 +341,7 @@ BodyPoints readVdbBodies(const std::string& path) {
             out.v.emplace_back(a[0], a[1], a[2]);
             out.w.emplace_back(b[0], b[1], b[2]);
             out.collider.push_back(collider.get(*it));
+            out.name.push_back(name ? name->get(*it) : std::string());
         }
     }
     return out;

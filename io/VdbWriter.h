@@ -14,12 +14,14 @@ namespace mpm {
 
 /// The rigid bodies at a frame, one point each, as Houdini instances geometry: P (centre of mass), orient (a unit
 /// quaternion in Houdini's order x, y, z, w: the turn from the scene's placement), v, w (angular velocity, rad/s)
-/// and collider (the body's index in the scene's collider list, to copy its geometry onto the point).
+/// collider (the body's index in the scene's collider list, to copy its geometry onto the point) and name (the
+/// collider's name in the scene, the attribute Houdini's packed primitives are matched by).
 struct BodyPoints {
     std::vector<Vec3d> x;
     std::vector<std::array<float, 4>> orient;
     std::vector<Vec3f> v, w;
     std::vector<int32_t> collider;
+    std::vector<std::string> name;
 };
 
 struct SurfaceGroup {

@@ -260,12 +260,14 @@ PYBIND11_MODULE(sparse_mpm, m) {
             d["v"] = vectors(b.v);
             d["w"] = vectors(b.w);
             d["collider"] = scalars(b.collider);
+            d["name"] = b.name;
             return d;
         },
         py::arg("path"),
         "The rigid bodies of a frame file (its grid \"bodies\", beside the points): a dict of numpy arrays, one row per "
         "body: P (centre of mass), orient (x, y, z, w, Houdini's order: the turn from the scene's placement), v, w "
-        "(angular velocity) and collider (the body's index in the scene's colliders); empty arrays when it has none.");
+        "(angular velocity), collider (the body's index in the scene's colliders) and name (a list: the collider's name in "
+        "the scene); empty when it has none.");
     m.def(
         "read_frame_names",
         [](const std::string& path) {

@@ -96,7 +96,8 @@ inline void mapShape(nlohmann::json& s, const RigidMap& m) {
 }  // namespace detail
 
 /// The scene `scene` (its JSON) turned and moved by `m`: gravity, every set's shape, velocity, spin and pivot,
-/// every collider's shape and motion (velocity, spin, pivot, keyframed positions and turns).
+/// every collider's shape and motion (velocity, spin, pivot, keyframed positions and turns), and a rigid body's
+/// initial velocity and spin (its axis locks name world axes and stay as they are).
 inline nlohmann::json transformScene(nlohmann::json scene, const RigidMap& m) {
     using namespace detail;
     nlohmann::json& sim = scene["simulation"];
@@ -110,6 +111,10 @@ inline nlohmann::json transformScene(nlohmann::json scene, const RigidMap& m) {
     if (!scene.contains("colliders")) return scene;
     for (nlohmann::json& c : scene["colliders"]) {
         mapShape(c, m);
+        if (c.contains("dynamic")) {
+            mapVector(c["dynamic"], "velocity", m);
+            mapVector(c["dynamic"], "angular_velocity", m);
+        }
         if (!c.contains("motion")) continue;
         nlohmann::json& motion = c["motion"];
         mapVector(motion, "velocity", m);

@@ -195,6 +195,8 @@ class SimulationTest(unittest.TestCase):
         with open(os.path.join(out, "bodies.csv")) as f:
             row = [r for r in csv.DictReader(f) if r["frame"] == "2"][0]
         self.assertEqual(b["collider"].tolist(), [1])
+        self.assertEqual(b["name"], ["collider1"])
+        self.assertEqual(row["name"], "collider1")
         np.testing.assert_allclose(b["P"][0], [float(row[k]) for k in "xyz"], atol=1e-6)
         np.testing.assert_allclose(b["orient"][0], [float(row[k]) for k in ("qx", "qy", "qz", "qw")], atol=1e-6)
         np.testing.assert_allclose(b["w"][0], [float(row[k]) for k in ("wx", "wy", "wz")], atol=1e-6)

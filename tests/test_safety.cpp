@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -25,6 +26,7 @@
 #include "io/Checkpoint.h"
 #include "io/Output.h"
 #include "io/PointFile.h"
+#include "io/SceneBudget.h"
 #include "io/SceneBuilder.h"
 #include "io/SceneReader.h"
 #include "io/VdbWriter.h"
@@ -330,13 +332,14 @@ TEST(Safety, ACheckpointOfFormatTwoResumesWithEachSetsMaterialWhereverTheListOfM
         EXPECT_EQ(paramBytes(again.state.species[s]), paramBytes(old.state.species[s]));
         EXPECT_EQ(particlesOf(again.state.species[s]).x, particlesOf(old.state.species[s]).x);
     }
-    // And `--resume` continues from it to frame 2, every set keeping its mass. --force: the test is of the format, and
-    // keys added to the scene format since the file was made would count as a changed scene.
+    // And `--resume` continues from it to frame 2, every set keeping its mass, without --force: the keys added to the
+    // scene format since the file was made (colliders' names, bodies' restitution, ...) count at their defaults.
     fs::create_directories(dir + "/out");
     fs::copy_file(data + "every_material_format2.mpmc", dir + "/out/every_material_checkpoint_0001.mpmc");
     const std::string scene = writeFile(dir + "/every_material.json", readFile(data + "every_material.json"));
-    const auto r = runMpm({"run", scene, "-o", dir + "/out", "--resume", "--force", "--quiet"}, dir);
+    const auto r = runMpm({"run", scene, "-o", dir + "/out", "--resume", "--quiet"}, dir);
     ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_EQ(r.output.find("changed"), std::string::npos) << r.output;
     EXPECT_TRUE(fs::exists(dir + "/out/every_material_0002.vdb"));
     const Checkpoint resumed = readCheckpoint(dir + "/out/every_material_checkpoint_0002.mpmc");
     EXPECT_EQ(resumed.info.frame, 2);
@@ -648,4 +651,33 @@ TEST(Safety, SetNamesWithCommasSurviveTheMetadata) {
     const auto jelly = std::find(back.set.begin(), back.set.end(), 1);
     ASSERT_NE(jelly, back.set.end());
     EXPECT_EQ(back.materialNames.at(std::size_t(back.material[std::size_t(jelly - back.set.begin())])), "jelly");
+}
+
+TEST(Safety, AControlGroupsMemoryLimitIsTheMemoryTheBudgetHas) {
+    // A container or a batch slot caps memory with a control group, below the machine's: the budget reads the least
+    // limit of the process's group and of every group above it, in cgroup v2 (memory.max) and v1
+    // (memory.limit_in_bytes), as /proc/self/cgroup names them. A tree like /sys/fs/cgroup, made here.
+    const std::string root = tempDir("cgroup");
+    const auto put = [&](const std::string& file, const std::string& text) {
+        fs::create_directories(fs::path(root + file).parent_path());
+        writeFile(root + file, text + "\n");
+    };
+    put("/slice/memory.max", "1073741824");                       // 1 GiB on the parent
+    put("/slice/job/memory.max", "max");                          // none on the group itself
+    put("/memory/memory.limit_in_bytes", "9223372036854771712");  // v1's "no limit"
+    put("/memory/batch/memory.limit_in_bytes", "2147483648");
+    std::string where;
+    EXPECT_EQ(cgroupMemoryLimit("0::/slice/job\n", root, where), 1073741824.0);
+    EXPECT_EQ(where, root + "/slice/memory.max");
+    EXPECT_EQ(cgroupMemoryLimit("4:memory:/batch\n1:cpu:/\n", root, where), 2147483648.0);
+    EXPECT_EQ(where, root + "/memory/batch/memory.limit_in_bytes");
+    // Both hierarchies (the hybrid layout): the lesser counts.
+    EXPECT_EQ(cgroupMemoryLimit("4:memory:/batch\n0::/slice/job\n", root, where), 1073741824.0);
+    // No limit anywhere, or no such group: infinite, and the machine's memory is the budget's.
+    EXPECT_TRUE(std::isinf(cgroupMemoryLimit("0::/\n3:cpuset:/\n", root, where)));
+    EXPECT_TRUE(std::isinf(cgroupMemoryLimit("0::/elsewhere\n", root + "/none", where)));
+    // This process: never more than the machine's physical memory.
+    const MemoryLimit here = memoryLimit();
+    EXPECT_GT(here.bytes, 0.0);
+    EXPECT_LE(here.bytes, double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE)));
 }

@@ -280,7 +280,7 @@ def keyframed_colliders(scene, first, last, root):
         if not made:
             continue
         obj, rest = made
-        obj.name = "collider_%d_%s" % (i, c.get("type"))
+        obj.name = rb.collider_name(i, c)
         if obj.parent is not root:
             rb.adopt(obj, root)
         obj.rotation_mode = "QUATERNION"

@@ -424,6 +424,12 @@ def placement_matrix(t):
     return Matrix.Translation(vec(t.get("translate", [0, 0, 0]))) @ rot @ Matrix.Scale(float(t.get("scale", 1.0)), 4)
 
 
+def collider_name(i, c):
+    """The Blender object name of collider i: the name the scene gave it, else collider_<i>_<type>."""
+    name = c.get("name", "")
+    return name if name and name != "collider%d" % i else "collider_%d_%s" % (i, c.get("type"))
+
+
 def collider_object(c, scene, frame, root):
     """The collider's object at its rest placement and the matrix placing it; None for planes and for what
     cannot be drawn."""
@@ -467,7 +473,7 @@ def add_colliders(scene, frame, root, material=None, towards=None):
         if not made:
             continue
         obj, rest = made
-        obj.name = "collider_%d_%s" % (i, c.get("type"))
+        obj.name = collider_name(i, c)
         if obj.parent is not root:
             adopt(obj, root)
         obj.matrix_basis = collider_matrix(scene, i, c, frame, rest) @ rest

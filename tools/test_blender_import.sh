@@ -17,7 +17,7 @@ cat >"$work/pour.json" <<'SCENE'
   "sets": [ { "name": "pool", "material": "water", "shape": { "type": "box", "min": [0,0.05,0], "max": [0.3,0.3,0.3] } },
             { "name": "cube", "material": "jelly", "shape": { "type": "box", "min": [0.5,0.05,0], "max": [0.7,0.25,0.2] } } ],
   "colliders": [ { "type": "plane" },
-                 { "type": "box", "center": [-0.2, 0.1, 0.15], "size": [0.1, 0.2, 0.3], "motion": { "velocity": [1, 0, 0] } } ] }
+                 { "type": "box", "name": "paddle", "center": [-0.2, 0.1, 0.15], "size": [0.1, 0.2, 0.3], "motion": { "velocity": [1, 0, 0] } } ] }
 SCENE
 "$mpm" run "$work/pour.json" -o "$work/out" --quiet
 # The checks below read the run's PLY frames with this.
@@ -66,7 +66,8 @@ for f in (1, 6):
     check(p["first_id"] == int(v["id"][0]), "frame %d: the first vertex is particle %d" % (f, v["id"][0]))
     check(np.allclose(p["first_co"], [v["x"][0], v["y"][0], v["z"][0]], atol=1e-6), "frame %d: position as in the file (mesh space)" % f)
     check(np.allclose(p["first_velocity"], [v["vx"][0], v["vy"][0], v["vz"][0]], atol=1e-7), "frame %d: velocity as in the file" % f)
-box = s["colliders"]["collider_1_box"]
+check("paddle" in s["colliders"], "the box is named as the scene names it: %s" % sorted(s["colliders"]))
+box = s["colliders"]["paddle"]
 moved = np.array(box["6"]) - np.array(box["1"])
 # 5 frames at 1 m/s along mpm's x, which stays Blender's x; mpm's y (up) is Blender's z.
 check(np.allclose(moved, [5 / 24.0, 0, 0], atol=1e-6), "the box moved by v t = 5/24 m along x: %s" % moved)

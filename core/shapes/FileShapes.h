@@ -11,6 +11,8 @@ namespace mpm {
 
 struct MeshShape {
     static constexpr const char* kType = "mesh";
+    /// A closed mesh can be a rigid body: its mass properties come from its triangles once read (core/shapes/Polyhedron.h).
+    static constexpr bool kBodyFromFile = true;
     std::string file;
     double voxelSize = 0.0;  ///< of the distance field; 0: chosen by the builder (io/SceneBuilder.cpp, meshField)
     double thickness = 0.0;  ///< > 0: a shell of this half-thickness around the surface (open meshes need one)
