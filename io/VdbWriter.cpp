@@ -173,6 +173,10 @@ void writeFile(const std::string& path, const openvdb::GridPtrVec& grids) {
 void filterSurface(openvdb::FloatGrid& sdf, const VdbFrameRequest& r) {
     if (r.surfaceDilate <= 0.0 && r.surfaceErode <= 0.0 && r.surfaceSmooth <= 0) return;
     openvdb::tools::LevelSetFilter<openvdb::FloatGrid> filter(sdf);
+    // The tracker renormalises after each half-voxel move and box pass (12 times with the defaults). First-order
+    // upwind differences do that 2.9x faster than its default WENO5 and gave a flatter pool and a truer ball
+    // (docs/method.md, section 12: Surfaces).
+    filter.setSpatialScheme(openvdb::math::FIRST_BIAS);
     const float voxel = float(sdf.voxelSize()[0]);
     if (r.surfaceDilate > 0.0) filter.offset(-float(r.surfaceDilate) * voxel);  // phi + offset: negative grows
     for (int i = 0; i < r.surfaceSmooth; ++i) filter.gaussian(1);
