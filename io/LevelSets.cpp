@@ -6,6 +6,7 @@
 #include <openvdb/tools/GridTransformer.h>
 #include <openvdb/tools/LevelSetMeasure.h>
 #include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/VolumeToMesh.h>
 
 #include <algorithm>
 #include <assimp/Importer.hpp>
@@ -248,6 +249,46 @@ std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::
 }
 
 double insideVolume(const LevelSet& ls) { return openvdb::tools::levelSetVolume(*ls.grid().grid); }
+
+/// Newton steps that put a surface vertex on the field's zero crossing: the first leaves an error of the order of
+/// the voxel's curvature term, the second squares it.
+constexpr int kSurfaceNewtonSteps = 2;
+
+TriangleMesh levelSetSurface(const LevelSet& ls) {
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    std::vector<openvdb::Vec4I> quads;
+    // volumeToMesh writes float points: taken about the band's middle, they keep their precision far from the origin.
+    Vec3d lo, hi;
+    ls.bounds(lo, hi);
+    const Vec3d middle = 0.5 * (lo + hi);
+    auto local = ls.grid().grid->transform().copy();
+    local->postTranslate(openvdb::Vec3d(-middle[0], -middle[1], -middle[2]));
+    openvdb::tools::volumeToMesh(*ls.grid().grid->copyReplacingTransform(local), points, triangles, quads, 0.0);
+    TriangleMesh mesh;
+    mesh.points.reserve(points.size());
+    // Each vertex is moved onto the zero crossing of the field the collider samples (trilinear), by Newton steps
+    // along its gradient: volumeToMesh puts it at the mean of its cell's edge crossings, inside a convex surface.
+    LevelSet::Sampler field(ls);
+    for (const openvdb::Vec3s& q : points) {
+        Vec3d p = middle + Vec3d(q[0], q[1], q[2]);
+        for (int step = 0; step < kSurfaceNewtonSteps; ++step) {
+            double phi;
+            Vec3d gradient;
+            field.phiAndGradient(p, phi, gradient);
+            if (gradient.squaredNorm() > 0.0) p -= phi * gradient / gradient.squaredNorm();
+        }
+        mesh.points.push_back(p);
+    }
+    mesh.triangles.reserve(triangles.size() + 2 * quads.size());
+    const auto corner = [](unsigned i) { return int(i); };
+    for (const openvdb::Vec3I& t : triangles) mesh.triangles.emplace_back(corner(t[0]), corner(t[1]), corner(t[2]));
+    for (const openvdb::Vec4I& q : quads) {
+        mesh.triangles.emplace_back(corner(q[0]), corner(q[1]), corner(q[2]));
+        mesh.triangles.emplace_back(corner(q[0]), corner(q[2]), corner(q[3]));
+    }
+    return mesh;
+}
 
 TriangleMesh placed(TriangleMesh mesh, const Placement& placement) {
     if (!placement.identity())

@@ -61,6 +61,11 @@ double vdbFieldBytes(const std::string& path, const std::string& grid, double sc
 /// The volume inside a level set's zero crossing [m^3] (OpenVDB's levelSetVolume).
 double insideVolume(const LevelSet& ls);
 
+/// The zero crossing of a level set as a closed triangle mesh in world coordinates (OpenVDB's volumeToMesh, not
+/// adaptive: one vertex per surface voxel, its quads cut in two). A surface that runs into the band's edge or out
+/// of the grid's active voxels comes out open (TriangleMesh::openEdges).
+TriangleMesh levelSetSurface(const LevelSet& ls);
+
 /// The mesh moved by a placement.
 TriangleMesh placed(TriangleMesh mesh, const Placement& placement);
 

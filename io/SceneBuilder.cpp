@@ -323,11 +323,27 @@ std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, 
                                     [&](Motion m) { return analyticCollider(shape, c.boundary, c.friction, std::move(m)); });
                 } else if constexpr (requires { S::kBodyFromFile; }) {
                     const std::string at = scene.file + ": " + where;
-                    if (shape.thickness > 0.0)
-                        throw SceneError(at + "/thickness: a mesh body is a closed solid; leave thickness out");
                     FieldNotes notes;
-                    notes.keepMesh = true;
-                    const auto ls = levelSetOf(scene, where, shape, true, false, &notes);
+                    std::shared_ptr<const LevelSet> ls;
+                    if constexpr (std::is_same_v<S, MeshShape>) {
+                        if (shape.thickness > 0.0)
+                            throw SceneError(at + "/thickness: a mesh body is a closed solid; leave thickness out");
+                        notes.keepMesh = true;
+                        ls = levelSetOf(scene, where, shape, true, false, &notes);
+                    } else {
+                        if (shape.file.find("$F") != std::string::npos)
+                            throw SceneError(at + "/file: " + shape.file +
+                                             ": a rigid body keeps its shape; a $F sequence of level sets cannot be one");
+                        if (!shape.velocityGrid.empty())
+                            throw SceneError(at + "/velocity_grid: a rigid body's surface moves with the body; leave it out");
+                        ls = levelSetOf(scene, where, shape, true, false, &notes);
+                        notes.mesh = levelSetSurface(*ls);
+                        if (const std::size_t open = notes.mesh.openEdges(); open > 0 || notes.mesh.triangles.empty())
+                            throw SceneError(at + "/file: " + shape.file + ": grid \"" + shape.grid +
+                                             "\" has no closed surface to be a rigid body of (" + std::to_string(open) +
+                                             " edges of its zero crossing border one triangle only: the surface runs into the "
+                                             "edge of the grid's band or active voxels)");
+                    }
                     if (warnings && !notes.warning.empty()) warnings->push_back(notes.warning);
                     if (voxel) *voxel = notes.voxel;
                     Eigen::AlignedBox3d box;
@@ -335,7 +351,8 @@ std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, 
                     const MassProperties props = polyhedronMassProperties(notes.mesh.points, notes.mesh.triangles,
                                                                           box.sizes().maxCoeff() / kMeshContactSamplesPerSide);
                     if (!(props.volume > 0.0))
-                        throw SceneError(at + "/file: " + shape.file + ": the mesh encloses no volume to be a rigid body of");
+                        throw SceneError(at + "/file: " + shape.file + ": the " + S::kType +
+                                         " encloses no volume to be a rigid body of");
                     return makeBody(props, notes.centre, [&](Motion m) {
                         return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction,
                                                                                  std::move(m), false);

@@ -321,9 +321,9 @@ inline const std::vector<std::string>& kAxisLocks() {
     return locks;
 }
 
-/// The `type` names of the collider shapes a rigid body can be, "sphere, box, cylinder, mesh": those whose mass,
+/// The `type` names of the collider shapes a rigid body can be, "sphere, box, cylinder, mesh, vdb": those whose mass,
 /// centre of mass and inertia come in closed form (massProperties, core/shapes/MassProperties.h), and those whose file
-/// gives them (kBodyFromFile: a closed mesh, core/shapes/Polyhedron.h).
+/// gives them (kBodyFromFile: a closed mesh, or a level set's zero crossing meshed, core/shapes/Polyhedron.h).
 inline const std::string& bodyShapeNames() {
     static const std::string names = []<class... S>(std::variant<S...>*) {
         std::string n;

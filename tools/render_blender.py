@@ -140,6 +140,22 @@ class Scene:
         done = [f for f in rows if f <= frame]
         return rows[max(done) if done else min(rows)]
 
+    def body_rest_centre(self, collider, c):
+        """A rigid body's centre of mass in the scene's placement (c_rest), from its first row: there its turn is the
+        motion's (an animated body) or none, so the motion's inverse takes the centre back. None where that row does
+        not allow it (a run resumed without its first frames)."""
+        rows = self.bodies.get(collider)
+        if not rows:
+            return None
+        first = min(rows)
+        centre, turn = rows[first]
+        t = first / self.fps
+        animated = t < float(c.get("dynamic", {}).get("animated_until", 0.0))
+        placed = motion_matrix(c.get("motion"), t, self.fps) if animated else Matrix.Identity(4)
+        if placed.to_quaternion().rotation_difference(turn).angle > 1e-6:
+            return None
+        return placed.inverted() @ centre
+
     def asset(self, name):
         return name if os.path.isabs(name) else os.path.join(self.base, name)
 
@@ -166,13 +182,17 @@ class Scene:
 
 def collider_matrix(scene, index, c, frame, rest):
     """What places collider `index` (object at its rest placement `rest`) at the frame: its motion, or for a rigid
-    body its pose from bodies.csv: x = x_com + R (x_rest - c_rest), the rest centre of mass being the box's, sphere's
-    or cylinder's centre, where `rest` puts the object's origin."""
+    body its pose from bodies.csv: x = x_com + R (x_rest - c_rest), the rest centre of mass c_rest from the body's first
+    row (a mesh's or level set's centre of mass need not be where its transform puts the file's origin), else where
+    `rest` puts the object's origin (a box's, sphere's or cylinder's centre)."""
     pose = scene.body_pose(index, frame) if c.get("dynamic") else None
     if pose is None:
         return motion_matrix(c.get("motion"), frame / scene.fps, scene.fps)
     centre, turn = pose
-    return Matrix.Translation(centre) @ turn.to_matrix().to_4x4() @ Matrix.Translation(-rest.translation)
+    c_rest = scene.body_rest_centre(index, c)
+    if c_rest is None:
+        c_rest = rest.translation
+    return Matrix.Translation(centre) @ turn.to_matrix().to_4x4() @ Matrix.Translation(-c_rest)
 
 
 def motion_matrix(motion, t, fps):

@@ -49,6 +49,9 @@ struct MeshShape {
 
 struct VdbShape {
     static constexpr const char* kType = "vdb";
+    /// A level set (not a $F sequence) can be a rigid body: its mass properties come from its zero crossing meshed
+    /// (io/LevelSets.h, levelSetSurface).
+    static constexpr bool kBodyFromFile = true;
     std::string file;
     std::string grid = "surface";
     std::string velocityGrid;  ///< of a sequence: the surface's velocity; empty: from the change of the level set
