@@ -202,7 +202,9 @@ int validate(const std::string& scenePath, bool strict, bool printScene) {
     if (printScene) std::cout << resolvedWithDerived(scene, deriveValues(scene)) << "\n";
     std::fprintf(stderr, "%s", describeBudget(budget).c_str());
     checkBudget(scene, budget);
-    std::vector<std::string> warnings = sceneWarnings(scene);
+    std::vector<std::string> bodies;
+    std::vector<std::string> warnings = sceneWarnings(scene, &bodies);
+    for (const std::string& b : bodies) std::fprintf(stderr, "%s\n", b.c_str());
     // A scene far larger than meant (sizes in other units: a radius of 2 m for 2 cm) shows first as a run of hours.
     constexpr double kLongRun = 3600.0;
     if (budget.runSeconds > kLongRun) {

@@ -101,6 +101,12 @@ struct Side {
 /// back to a height at g dt more than the speed it left at, so bouncing the approach with the step's gravity in it
 /// keeps a resting body hopping: at e g dt / (1 - e), beyond any fixed threshold as e nears 1. Returns the work the
 /// contacts' moving colliders did on a: each one's impulse times its velocity (zero between bodies).
+/// Sequential-impulse sweeps: at least kMinSweeps, then until the largest change of an impulse in a sweep is under
+/// kConverged of the largest normal impulse, or kMaxSweeps. A faceted ball (r = 10 voxels) landing at 2.5 m/s kept
+/// 1.1 rad/s of spin after 8 sweeps, 0.48 after 32, 0.06 after 128 and none after 256.
+constexpr int kMinSweeps = 8, kMaxSweeps = 256;
+constexpr double kConverged = 1e-6;
+
 double solveContacts(Side a, Side b, std::vector<Contact>& contacts, double dt, double restingSpeed, const Vec3d& stepGravity) {
     const auto push = [&](const Contact& c, const Vec3d& J) {
         a.s.velocity += a.invMass.cwiseProduct(J);
@@ -123,14 +129,18 @@ double solveContacts(Side a, Side b, std::vector<Contact>& contacts, double dt, 
         if (c.restitution > 0.0 && met < -restingSpeed && approach * dt <= c.depth)
             c.target = std::max(c.target, -c.restitution * met);
     }
-    constexpr int kSweeps = 8;
-    for (int sweep = 0; sweep < kSweeps; ++sweep)
+    // Sweeps until no impulse changes by more than kConverged of the largest: a body landing on a cluster of
+    // samples (a faceted ball, a face) needs many, and stopped early it keeps a spin that rolls it away.
+    for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
+        double change = 0.0, largest = 0.0;
         for (Contact& c : contacts) {
             const double kn = inverseMass(c, c.n);
             if (!(kn > 0.0)) continue;
             // Normal: impulses only pushing (accumulated, clamped at 0).
             const double normal = std::max(c.normal + (c.target - relative(c).dot(c.n)) / kn, 0.0);
             push(c, (normal - c.normal) * c.n);
+            change = std::max(change, std::abs(normal - c.normal));
+            largest = std::max(largest, normal);
             c.normal = normal;
             // Friction: the sliding stopped, within the cone |T| <= mu N.
             Vec3d vt = relative(c);
@@ -144,13 +154,16 @@ double solveContacts(Side a, Side b, std::vector<Contact>& contacts, double dt, 
             const double limit = c.mu * c.normal;
             if (tangential.norm() > limit) tangential *= limit / tangential.norm();
             push(c, tangential - c.tangential);
+            change = std::max(change, (tangential - c.tangential).norm());
             c.tangential = tangential;
         }
+        if (sweep + 1 >= kMinSweeps && change <= kConverged * largest) break;
+    }
     // Apart along the normals, the deepest first in effect: each contact pushes what is left. Against a fixed
     // collider only a's free axes move, so they alone count as pushed.
     const bool fixedB = b.invMass.isZero();
     Vec3d apart = Vec3d::Zero();
-    for (int sweep = 0; sweep < kSweeps; ++sweep)
+    for (int sweep = 0; sweep < kMinSweeps; ++sweep)
         for (const Contact& c : contacts) {
             const double left = c.depth - apart.dot(c.n);
             if (left > 0.0) apart += left * (fixedB ? c.n.cwiseProduct(a.moveFree) : c.n);

@@ -3,9 +3,14 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <openvdb/tools/FastSweeping.h>
-#include <openvdb/tools/GridTransformer.h>
+#include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetMeasure.h>
+#include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/Prune.h>
+#include <openvdb/tools/SignedFloodFill.h>
+#include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <algorithm>
@@ -181,6 +186,31 @@ double vdbFieldBytes(const std::string& path, const std::string& gridName, doubl
 }
 
 namespace {
+/// The level set `in` (its transform turned) sampled trilinearly at the voxels of an axis-aligned grid of `voxel`
+/// [m] that lie within one voxel of its band. OpenVDB's resampleToMatch would rebuild a level set through a mesh,
+/// whose faces cut inside a convex surface (a ball of 10 voxels lost 1.2% of its volume, its surface 1e-3 m).
+openvdb::FloatGrid::Ptr resampledAxisAligned(const openvdb::FloatGrid& in, double voxel) {
+    const float background = in.background();
+    auto out = openvdb::FloatGrid::create(background);
+    out->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+    out->setGridClass(openvdb::GRID_LEVEL_SET);
+    // The output voxels nearest the band's, grown by one so that the turned lattice leaves no gap.
+    openvdb::MaskGrid mask(false);
+    for (auto it = in.cbeginValueOn(); it; ++it)
+        mask.tree().setValueOn(out->transform().worldToIndexCellCentered(in.indexToWorld(it.getCoord())));
+    openvdb::tools::dilateActiveValues(mask.tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    out->tree().topologyUnion(mask.tree());
+    // The grid sampler reads the tree without an accessor's cache, so the threads share it.
+    const openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sampler(in);
+    const openvdb::math::Transform& placed = out->transform();
+    openvdb::tools::foreach (out->beginValueOn(), [&](const openvdb::FloatGrid::ValueOnIter& v) {
+        v.setValue(std::clamp(sampler.wsSample(placed.indexToWorld(v.getCoord())), -background, background));
+    });
+    openvdb::tools::pruneLevelSet(out->tree());
+    openvdb::tools::signedFloodFill(out->tree());
+    return out;
+}
+
 std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const std::string& gridName, double reach,
                                                   const Placement& placement, double band) {
     const openvdb::GridBase::Ptr base = readVdbGrid(path, gridName);
@@ -210,11 +240,7 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
                          t.baseMap()->getAffineMap()->getMat4().getMat3().eq(openvdb::math::Mat3d::identity() * vs[0], 1e-9);
     if (!aligned) {
         // Resample onto an axis-aligned grid of the same voxel size, so that sampling needs no rotation.
-        auto out = openvdb::FloatGrid::create(grid->background());
-        out->setTransform(openvdb::math::Transform::createLinearTransform(vs[0]));
-        openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*grid, *out);
-        out->setGridClass(openvdb::GRID_LEVEL_SET);
-        grid = out;
+        grid = resampledAxisAligned(*grid, vs[0]);
     }
     // The background is the band's half width in world units (a level set's convention), stored as a float.
     constexpr double kFloatRounding = 1e-6;

@@ -1,5 +1,6 @@
 #include "io/SceneBuilder.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -755,7 +756,7 @@ void overlapWarnings(const SceneDesc& scene, const std::vector<std::vector<Vec3d
 
 }  // namespace
 
-std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
+std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::string>* bodies) {
     std::vector<std::string> out;
     // Explicit MPM is stable for CFL numbers below about 1 (the stability sweep's bound, docs/method.md section 8).
     constexpr double kExplicitBound = 1.0;
@@ -767,7 +768,35 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene) {
         out.push_back(s.str());
     }
     std::vector<std::unique_ptr<Collider>> colliders;
-    for (std::size_t c = 0; c < scene.colliders.size(); ++c) colliders.push_back(colliderOf(scene, c, nullptr, &out));
+    for (std::size_t c = 0; c < scene.colliders.size(); ++c) {
+        std::optional<BodySpec> body;
+        colliders.push_back(colliderOf(scene, c, nullptr, &out, nullptr, &body));
+        if (!body) continue;
+        const ColliderDesc& d = scene.colliders[c];
+        const RigidBodyModel& m = body->model;
+        if (bodies) {
+            // What the user cannot see elsewhere: the mass and inertia the shape gave (a file's, above all).
+            const Eigen::SelfAdjointEigenSolver<Mat3d> principal(m.inertia);
+            std::ostringstream s;
+            s.precision(4);
+            s << "collider " << c << " (" << d.name << "): a rigid body of " << m.mass << " kg, centre of mass ("
+              << m.restCentre[0] << ", " << m.restCentre[1] << ", " << m.restCentre[2] << ") m, principal moments of inertia "
+              << principal.eigenvalues()[0] << ", " << principal.eigenvalues()[1] << ", " << principal.eigenvalues()[2]
+              << " kg m^2";
+            bodies->push_back(s.str());
+        }
+        // A locked axis takes no velocity: what the scene gives along it is dropped.
+        const Vec3d lostSpin = d.dynamic.angularVelocity.cwiseProduct(Vec3d::Ones() - m.turnFree);
+        const Vec3d lostVelocity = d.dynamic.velocity.cwiseProduct(Vec3d::Ones() - m.moveFree);
+        if (!lostSpin.isZero())
+            out.push_back(scene.file + ": /colliders/" + std::to_string(c) +
+                          "/dynamic/angular_velocity: turns about an axis lock_rotation holds (\"" + d.dynamic.lockRotation +
+                          "\"); that part is dropped");
+        if (!lostVelocity.isZero())
+            out.push_back(scene.file + ": /colliders/" + std::to_string(c) +
+                          "/dynamic/velocity: moves along an axis lock_translation holds (\"" + d.dynamic.lockTranslation +
+                          "\"); that part is dropped");
+    }
     std::vector<std::vector<Vec3d>> positions(scene.sets.size());
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const ParticleSetDesc& d = scene.sets[i];

@@ -56,7 +56,8 @@ inline constexpr double kSampleUpTo = 2e6;
 /// than kFewParticles particles, a set starting partly inside a collider, two sets that overlap. Samples the
 /// sets (up to kSampleUpTo particles) and builds the colliders (mpm validate prints these; with --strict they fail it).
 inline constexpr long long kFewParticles = 100;
-std::vector<std::string> sceneWarnings(const SceneDesc& scene);
+/// `bodies`, if given, receives a line per rigid body: its mass, centre of mass and principal moments of inertia.
+std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::string>* bodies = nullptr);
 
 /// The values the builder derives for keys a scene leaves to it (Key::derived): each collider's pivot (its
 /// centre) and so its keyframes' positions, a mesh collider's voxel, and each spinning set's pivot (its centroid).
