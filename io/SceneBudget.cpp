@@ -294,7 +294,10 @@ std::string describeBudget(const SceneBudget& b) {
     s << "); " << b.machineHolder << " " << gib(b.machineBytes) << "\n";
     s << "substeps per frame: about " << b.substepsPerFrame << " at the start (dt = " << b.dt << " s, set by " << b.stepCause
       << ")\n";
-    if (b.runSeconds > 0.0) s << "run time: about " << duration(b.runSeconds) << " here (" << b.runBasis << ")\n";
+    if (b.runSeconds > 0.0) {
+        const std::string d = duration(b.runSeconds);
+        s << "run time: " << (d.rfind("under", 0) == 0 ? "" : "about ") << d << " here (" << b.runBasis << ")\n";
+    }
     return s.str();
 }
 

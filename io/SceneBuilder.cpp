@@ -288,6 +288,17 @@ void animationWarnings(const SceneDesc& scene, const std::string& where, const C
         say("is not before the scene's end (frame ", scene.frames, "): the body never leaves its animation");
 }
 
+/// A locked axis takes no velocity: what a body's scene gives along one is dropped, with a word.
+void lockWarnings(const SceneDesc& scene, const std::string& where, const DynamicDesc& d, const RigidBodyModel& m,
+                  std::vector<std::string>& warnings) {
+    if (!d.angularVelocity.cwiseProduct(Vec3d::Ones() - m.turnFree).isZero())
+        warnings.push_back(scene.file + ": " + where + "/dynamic/angular_velocity: turns about an axis lock_rotation holds (\"" +
+                           d.lockRotation + "\"); that part is dropped");
+    if (!d.velocity.cwiseProduct(Vec3d::Ones() - m.moveFree).isZero())
+        warnings.push_back(scene.file + ": " + where + "/dynamic/velocity: moves along an axis lock_translation holds (\"" +
+                           d.lockTranslation + "\"); that part is dropped");
+}
+
 /// Collider `index`; `pivot`, if given, receives the pivot its motion turns about (the scene's, or its centre), and
 /// `warnings` what is worth a word about its field; `body`, what a dynamic collider is as a rigid body.
 std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, Vec3d* pivot = nullptr,
@@ -314,6 +325,7 @@ std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, 
                         if (warnings) animationWarnings(scene, where, c, *warnings);
                     }
                     BodySpec spec = bodyOf(c.dynamic, props, animation);
+                    if (warnings) lockWarnings(scene, where, c.dynamic, spec.model, *warnings);
                     if (pivot && !animation) *pivot = spec.model.restCentre;
                     auto made = collider(Motion::dynamic(spec.frame, animation));
                     if (body) *body = std::move(spec);
@@ -772,30 +784,18 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
         std::optional<BodySpec> body;
         colliders.push_back(colliderOf(scene, c, nullptr, &out, nullptr, &body));
         if (!body) continue;
-        const ColliderDesc& d = scene.colliders[c];
         const RigidBodyModel& m = body->model;
         if (bodies) {
             // What the user cannot see elsewhere: the mass and inertia the shape gave (a file's, above all).
             const Eigen::SelfAdjointEigenSolver<Mat3d> principal(m.inertia);
             std::ostringstream s;
             s.precision(4);
-            s << "collider " << c << " (" << d.name << "): a rigid body of " << m.mass << " kg, centre of mass ("
+            s << "collider " << c << " (" << scene.colliders[c].name << "): a rigid body of " << m.mass << " kg, centre of mass ("
               << m.restCentre[0] << ", " << m.restCentre[1] << ", " << m.restCentre[2] << ") m, principal moments of inertia "
               << principal.eigenvalues()[0] << ", " << principal.eigenvalues()[1] << ", " << principal.eigenvalues()[2]
               << " kg m^2";
             bodies->push_back(s.str());
         }
-        // A locked axis takes no velocity: what the scene gives along it is dropped.
-        const Vec3d lostSpin = d.dynamic.angularVelocity.cwiseProduct(Vec3d::Ones() - m.turnFree);
-        const Vec3d lostVelocity = d.dynamic.velocity.cwiseProduct(Vec3d::Ones() - m.moveFree);
-        if (!lostSpin.isZero())
-            out.push_back(scene.file + ": /colliders/" + std::to_string(c) +
-                          "/dynamic/angular_velocity: turns about an axis lock_rotation holds (\"" + d.dynamic.lockRotation +
-                          "\"); that part is dropped");
-        if (!lostVelocity.isZero())
-            out.push_back(scene.file + ": /colliders/" + std::to_string(c) +
-                          "/dynamic/velocity: moves along an axis lock_translation holds (\"" + d.dynamic.lockTranslation +
-                          "\"); that part is dropped");
     }
     std::vector<std::vector<Vec3d>> positions(scene.sets.size());
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {

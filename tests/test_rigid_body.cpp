@@ -798,6 +798,10 @@ TEST(RigidBody, ValidateStatesEachBodysMassAndWarnsOfVelocityAlongALockedAxis) {
     EXPECT_NE(warnings[0].find("/colliders/0/dynamic/angular_velocity: turns about an axis lock_rotation holds (\"x\")"),
               std::string::npos)
         << warnings[0];
+    // A run says it too (the warnings found while building, which mpm run prints).
+    DerivedValues derived;
+    buildSimulation(parseScene(scene.dump(), "/tmp/rigid_body_validate.json"), Comm::single(), &derived);
+    EXPECT_EQ(derived.warnings, warnings);
 }
 
 TEST(RigidBody, AShapeWithoutMassPropertiesIsRefusedNamingTheShapesThatCan) {
