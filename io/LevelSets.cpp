@@ -307,11 +307,10 @@ TriangleMesh levelSetSurface(const LevelSet& ls) {
         mesh.points.push_back(p);
     }
     mesh.triangles.reserve(triangles.size() + 2 * quads.size());
-    const auto corner = [](unsigned i) { return int(i); };
-    for (const openvdb::Vec3I& t : triangles) mesh.triangles.emplace_back(corner(t[0]), corner(t[1]), corner(t[2]));
+    for (const openvdb::Vec3I& t : triangles) mesh.triangles.emplace_back(int(t[0]), int(t[1]), int(t[2]));
     for (const openvdb::Vec4I& q : quads) {
-        mesh.triangles.emplace_back(corner(q[0]), corner(q[1]), corner(q[2]));
-        mesh.triangles.emplace_back(corner(q[0]), corner(q[2]), corner(q[3]));
+        mesh.triangles.emplace_back(int(q[0]), int(q[1]), int(q[2]));
+        mesh.triangles.emplace_back(int(q[0]), int(q[2]), int(q[3]));
     }
     return mesh;
 }

@@ -351,7 +351,10 @@ std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, 
                             throw SceneError(at + "/velocity_grid: a rigid body's surface moves with the body; leave it out");
                         ls = levelSetOf(scene, where, shape, true, false, &notes);
                         notes.mesh = levelSetSurface(*ls);
-                        if (const std::size_t open = notes.mesh.openEdges(); open > 0 || notes.mesh.triangles.empty())
+                        if (notes.mesh.triangles.empty())
+                            throw SceneError(at + "/file: " + shape.file + ": grid \"" + shape.grid +
+                                             "\" has no zero crossing to be a rigid body of");
+                        if (const std::size_t open = notes.mesh.openEdges(); open > 0)
                             throw SceneError(at + "/file: " + shape.file + ": grid \"" + shape.grid +
                                              "\" has no closed surface to be a rigid body of (" + std::to_string(open) +
                                              " edges of its zero crossing border one triangle only: the surface runs into the "
