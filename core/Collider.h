@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "base/Types.h"
+#include "core/Settings.h"
 #include "sparse/LeafGeometry.h"
 
 namespace mpm {
@@ -22,12 +23,6 @@ inline double colliderReach(double dx) {
     constexpr double kMarginCells = 3.0;
     return 0.5 * std::sqrt(3.0) * (kLeafDim - 1 + 2.0 * kMarginCells) * dx;
 }
-
-enum class Boundary {
-    Sticky,    ///< node velocity becomes the collider's
-    Slip,      ///< the normal component is removed, in both directions (only inwards on a wall with friction)
-    Separate,  ///< the normal component is removed only while the node moves into the object
-};
 
 const char* boundaryName(Boundary b);
 

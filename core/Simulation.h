@@ -19,6 +19,7 @@
 #include "core/Comm.h"
 #include "core/Diagnostics.h"
 #include "core/GridUpdate.h"
+#include "core/Settings.h"
 #include "core/SimState.h"
 #include "core/Species.h"
 #include "core/Stability.h"
@@ -26,39 +27,6 @@
 #include "sparse/SparseGrid.h"
 
 namespace mpm {
-
-/// How bodies in contact share the grid: one velocity field for all material (bodies that touch move
-/// together there), or one field per body with a contact condition between them (core/MultiField.h).
-enum class ContactModel { SingleField, MultiField };
-/// Where walls act: wherever the stencil reaches them, or at the material's surface (core/Collider.h SurfaceContact).
-enum class WallContact { Stencil, Surface };
-/// What nodes inside a sticky or slip wall hold: the wall's velocity, or the velocity mirrored from their image
-/// across the surface (core/GridUpdate.h mirrorGhostNodes).
-enum class WallGhosts { Held, Mirror };
-
-struct SimulationSettings {
-    double dx = 0.02;                        ///< grid spacing [m]
-    Vec3d gravity = Vec3d(0.0, -9.81, 0.0);  ///< Y is up, as in Houdini [m/s^2]
-    TransferSettings transfer;
-    double fps = 24.0;
-    int substepsPerFrame = 20;              ///< target dt = 1 / (fps * substepsPerFrame)
-    bool adaptive = true;                   ///< also bound dt by the CFL condition
-    double cfl = 0.5;                       ///< C in dt <= C dx / (c + |v|max)
-    double maxDisplacement = 0.0;           ///< thesis rule: max node displacement per substep in cells; 0 = off
-    long long maxSubstepsPerFrame = 20000;  ///< watchdog: a frame that would need more stops the run
-    StabilitySettings stability;
-    ContactModel contact = ContactModel::SingleField;
-    float contactFriction = 0.0f;  ///< Coulomb mu between bodies (multi_field)
-    WallGhosts wallGhosts = WallGhosts::Held;
-    WallContact wallContact = WallContact::Stencil;  ///< for `separate` colliders (sticky and slip hold from the stencil's reach)
-
-    /// Ranks re-cut the leaves into equal shares of particles when the most loaded holds more than this much
-    /// above the mean (simulation.rebalance_imbalance; docs/distributed.md has the measurement); results do
-    /// not depend on it, only the time per substep does.
-    double rebalanceImbalance = 0.1;
-
-    double targetDt() const { return 1.0 / (fps * substepsPerFrame); }
-};
 
 /// A particle set that emits copies of a sampled shape at frame starts (thesis section 6.2).
 struct Emitter {

@@ -9,22 +9,11 @@
 
 #include "core/Comm.h"
 #include "core/Diagnostics.h"
+#include "core/Settings.h"
 #include "core/SimState.h"
 #include "core/Transfer.h"
 
 namespace mpm {
-
-struct StabilitySettings {
-    bool cellCrossing = true;  ///< a particle moving more than one cell in a substep breaks the stencil
-    /// Total energy (kinetic + stored + gravity) may not rise above its lowest value since the last emission
-    /// by more than this fraction of the largest kinetic + stored energy seen; 0 = off. Colliders are static
-    /// and dissipative, so without emission nothing does positive work.
-    double energyGrowth = 0.5;
-    /// The CFL step may not shrink by more than this factor in one substep (a crushed material or a flung
-    /// particle makes the step collapse and the run stall); 0 = off.
-    double stepCollapse = 100.0;
-    int retries = 0;  ///< restarts of a failed frame, each halving the time step; 0 = stop at once
-};
 
 /// A blow-up or invalid state found during a substep; the message names frame, substep, particle and field.
 class SimulationError : public std::runtime_error {

@@ -11,19 +11,11 @@
 #include <vector>
 
 #include "core/Kernels.h"
+#include "core/Settings.h"
 #include "core/Species.h"
 #include "sparse/SparseGrid.h"
 
 namespace mpm {
-
-enum class TransferScheme { APIC, PIC };
-enum class ForceScheme { Standard, MLS };
-
-struct TransferSettings {
-    Interpolation interpolation = Interpolation::Quadratic;
-    TransferScheme transfer = TransferScheme::APIC;
-    ForceScheme force = ForceScheme::Standard;
-};
 
 /// What G2P learns while it passes over the particles.
 struct G2PSummary {

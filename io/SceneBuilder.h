@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/Comm.h"
+#include "core/Simulation.h"
 #include "io/SceneDesc.h"
 
 namespace mpm {

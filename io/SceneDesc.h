@@ -5,8 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "core/Collider.h"
-#include "core/Simulation.h"
+#include "core/Settings.h"
 #include "core/Species.h"
 #include "core/shapes/Shapes.h"
 
