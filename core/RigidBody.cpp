@@ -73,8 +73,10 @@ struct Contact {
     double mu;                         ///< Coulomb coefficient, infinite for a sticky collider
     double restitution = 0.0;          ///< separating over approaching speed
     double target = 0.0;               ///< the normal velocity the contact seeks: the gap's closing, or a bounce
+    double rolling = 0.0;              ///< rolling resistance coefficient
     double normal = 0.0;               ///< accumulated normal impulse
     Vec3d tangential = Vec3d::Zero();  ///< accumulated friction impulse
+    Vec3d couple = Vec3d::Zero();      ///< accumulated rolling-resistance angular impulse on a
 };
 
 /// One side of the contacts: its state and how an impulse changes its velocities (nothing, for a fixed collider).
@@ -122,6 +124,45 @@ double solveContacts(Side a, Side b, std::vector<Contact>& contacts, double dt, 
     const auto relative = [&](const Contact& c) {
         return Vec3d(a.s.velocity + a.s.spin.cross(c.ra) - b.s.velocity - b.s.spin.cross(c.rb) - c.vc);
     };
+    // Friction: the sliding stopped, within the cone |T| <= mu N. Returns the change of the friction impulse.
+    const auto resistSliding = [&](Contact& c) {
+        Vec3d vt = relative(c);
+        vt -= vt.dot(c.n) * c.n;
+        const double speed = vt.norm();
+        if (!(speed > 0.0)) return 0.0;
+        const Vec3d dir = vt / speed;
+        const double kt = inverseMass(c, dir);
+        if (!(kt > 0.0)) return 0.0;
+        Vec3d tangential = c.tangential - (speed / kt) * dir;
+        const double limit = c.mu * c.normal;
+        if (tangential.norm() > limit) tangential *= limit / tangential.norm();
+        push(c, tangential - c.tangential);
+        const double change = (tangential - c.tangential).norm();
+        c.tangential = tangential;
+        return change;
+    };
+    // Rolling resistance: a couple against the relative spin about axes in the contact plane, at most the rolling
+    // coefficient times the normal impulse times the lever (the centre's height over the contact; a ball's radius).
+    // A couple moves no centre, so momentum is untouched; friction then keeps the contact from slipping.
+    const auto resistRolling = [&](Contact& c) {
+        Vec3d roll = a.s.spin - b.s.spin;
+        roll -= roll.dot(c.n) * c.n;
+        const double rate = roll.norm();
+        if (!(rate > 0.0)) return 0.0;
+        const Vec3d axis = roll / rate;
+        const double k = axis.dot(a.invI * axis) + axis.dot(b.invI * axis);
+        if (!(k > 0.0)) return 0.0;
+        const double lever = std::abs(c.ra.dot(c.n));
+        if (!(lever > 0.0)) return 0.0;
+        Vec3d couple = c.couple - (rate / k) * axis;
+        const double limit = c.rolling * c.normal * lever;
+        if (couple.norm() > limit) couple *= limit / couple.norm();
+        a.s.spin += a.invI * (couple - c.couple);
+        b.s.spin -= b.invI * (couple - c.couple);
+        const double change = (couple - c.couple).norm() / lever;  // as an impulse, for the convergence test
+        c.couple = couple;
+        return change;
+    };
     for (Contact& c : contacts) {
         // No approach beyond the gap the step may close; a contact met within the step at speed bounces.
         c.target = c.depth < 0.0 ? c.depth / dt : 0.0;
@@ -142,20 +183,8 @@ double solveContacts(Side a, Side b, std::vector<Contact>& contacts, double dt, 
             change = std::max(change, std::abs(normal - c.normal));
             largest = std::max(largest, normal);
             c.normal = normal;
-            // Friction: the sliding stopped, within the cone |T| <= mu N.
-            Vec3d vt = relative(c);
-            vt -= vt.dot(c.n) * c.n;
-            const double speed = vt.norm();
-            if (!(speed > 0.0)) continue;
-            const Vec3d dir = vt / speed;
-            const double kt = inverseMass(c, dir);
-            if (!(kt > 0.0)) continue;
-            Vec3d tangential = c.tangential - (speed / kt) * dir;
-            const double limit = c.mu * c.normal;
-            if (tangential.norm() > limit) tangential *= limit / tangential.norm();
-            push(c, tangential - c.tangential);
-            change = std::max(change, (tangential - c.tangential).norm());
-            c.tangential = tangential;
+            change = std::max(change, resistSliding(c));
+            if (c.rolling > 0.0) change = std::max(change, resistRolling(c));
         }
         if (sweep + 1 >= kMinSweeps && change <= kConverged * largest) break;
     }
@@ -209,6 +238,7 @@ int RigidBodyModel::touch(RigidBodyState& s, const std::vector<FixedCollider>& f
             Contact contact{.ra = q - s.centre, .rb = Vec3d::Zero(), .n = n, .depth = -phi, .mu = frictionOf(*c)};
             contact.vc = c->velocity(q, t);
             contact.restitution = std::max(restitution, f.restitution);
+            contact.rolling = rollingResistance;
             contacts.push_back(contact);
         }
     }
@@ -235,6 +265,7 @@ int touchBodies(const RigidBodyModel& A, RigidBodyState& a, const Collider& coll
     const double friction = std::min(frictionOf(colliderA), frictionOf(colliderB));
     // The bouncier of the two sets the pair's restitution (a rubber ball bounces off anything).
     const double bounce = std::max(A.restitution, B.restitution);
+    const double rolling = std::max(A.rollingResistance, B.rollingResistance);
     std::vector<Contact> contacts;
     // The samples of `from` against the shape of `into`; sign turns the normal so that it points from b to a.
     const auto sample = [&](const RigidBodyModel& M, const RigidBodyState& s, const Collider& into, double sign) {
@@ -245,8 +276,13 @@ int touchBodies(const RigidBodyModel& A, RigidBodyState& a, const Collider& coll
             if (!(phi < closing)) continue;
             const Vec3d n = into.normal(p, t);
             const Vec3d q = p - M.contactRadii[i] * n;
-            contacts.push_back(Contact{
-                .ra = q - a.centre, .rb = q - b.centre, .n = sign * n, .depth = -phi, .mu = friction, .restitution = bounce});
+            contacts.push_back(Contact{.ra = q - a.centre,
+                                       .rb = q - b.centre,
+                                       .n = sign * n,
+                                       .depth = -phi,
+                                       .mu = friction,
+                                       .restitution = bounce,
+                                       .rolling = rolling});
         }
     };
     sample(A, a, colliderB, 1.0);

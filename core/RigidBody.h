@@ -18,12 +18,12 @@
 // the material booked as any moving collider's; other bodies touch it as a fixed collider), then is a body from the
 // pose, velocity and spin the motion had. Locked axes (world axes) keep their velocity component at zero. Against the fixed
 // colliders (those the scene moves, or not at all) a body touches at sample points of its surface: contact with Newton's
-// restitution (none by default) and Coulomb friction by sequential impulses (projected Gauss-Seidel over the contacts, a fixed
-// number of sweeps in a fixed order, with speculative contacts for points a step could carry in: Catto 2006, "Fast and Simple
-// Physics using Sequential Impulses"); a contact bounces when the step closes it at more than one step's gravity
-// (slower, it rests), from where the step began (up to one step's travel early: the limit of speculative contacts);
-// then the body is moved out along the contacts' normals. Two bodies touch the same way, each one's samples against
-// the other's shape, with equal and opposite impulses (momentum kept) and the push out shared by their inverse
+// restitution (none by default), Coulomb friction and a rolling-resistance couple (none by default) by sequential impulses
+// (projected Gauss-Seidel over the contacts, a fixed number of sweeps in a fixed order, with speculative contacts for points a
+// step could carry in: Catto 2006, "Fast and Simple Physics using Sequential Impulses"); a contact bounces when the step closes
+// it at more than one step's gravity (slower, it rests), from where the step began (up to one step's travel early: the limit of
+// speculative contacts); then the body is moved out along the contacts' normals. Two bodies touch the same way, each one's
+// samples against the other's shape, with equal and opposite impulses (momentum kept) and the push out shared by their inverse
 // masses; the pairs are solved in collider order after the contacts with the fixed colliders.
 #include <array>
 #include <cmath>
@@ -67,6 +67,7 @@ struct RigidBodyModel {
     std::vector<Vec3d> contactPoints;         ///< surface samples in the scene's placement (core/shapes/MassProperties.h)
     std::vector<double> contactRadii;         ///< per sample: the surface lies this far beyond it (a sphere's radius)
     double restitution = 0.0;                 ///< of its contacts with colliders and bodies: separating over approaching speed
+    double rollingResistance = 0.0;           ///< couple against rolling over normal force times the centre's height
     std::shared_ptr<const Motion> animation;  ///< followed until `release`; none: the material moves it from the start
     double release = 0.0;                     ///< [s]
 

@@ -256,6 +256,7 @@ BodySpec bodyOf(const DynamicDesc& d, const MassProperties& props, std::shared_p
     b.model.contactPoints = props.contactPoints;
     b.model.contactRadii = props.contactRadii;
     b.model.restitution = d.restitution;
+    b.model.rollingResistance = d.rollingResistance;
     for (int a = 0; a < 3; ++a) {
         const char axis = char('x' + a);
         b.model.moveFree[a] = d.lockTranslation.find(axis) == std::string::npos ? 1.0 : 0.0;

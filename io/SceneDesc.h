@@ -64,6 +64,7 @@ struct DynamicDesc {
     Vec3d velocity = Vec3d::Zero(), angularVelocity = Vec3d::Zero();
     std::string lockTranslation = "none", lockRotation = "none";  ///< world axes held still: none, x, y, z, xy, ...
     double restitution = 0.0;                                     ///< of its contacts with colliders and other bodies
+    double rollingResistance = 0.0;                               ///< the couple against rolling, over normal force and lever
     double animatedUntil = 0.0;                                   ///< > 0: it follows the collider's motion until then [s]
 };
 

@@ -479,6 +479,39 @@ TEST(RigidBody, TwoBodiesPartAsNewtonsLawOfRestitutionSays) {
     }
 }
 
+TEST(RigidBody, RollingResistanceSlowsARollingBallAtCGOverOnePlusIOverMR2) {
+    // A ball (r = 0.1 m, I = 2/5 m r^2) rolling at 1 m/s on a floor of friction 0.5 with rolling_resistance c = 0.1
+    // meets a couple c N r: rolling without slipping, its kinetic energy 0.7 m v^2 falls at c m g v, so it slows at
+    // a = c g / 1.4 = 0.7007 m/s^2, stops after v0^2 / (2 a) = 0.7136 m and stays. The couple's bound is met exactly
+    // each step, so the speed follows v0 - a t to one step's change a dt, the stopping point to one step's travel
+    // v0 dt, and the contact does not slip (to the sweeps' convergence, 1e-6 of the impulses). In the placements of
+    // tests/SceneVariants.h. Without the couple (c = 0) it rolls on at 1 m/s.
+    const double r = 0.1, v0 = 1.0, c = 0.1, a = c * kG / 1.4, stop = v0 * v0 / (2.0 * a);
+    for (const double coefficient : {c, 0.0})
+        for (const RigidMap& m : mpm::test::sceneVariants(0.02)) {
+            SCOPED_TRACE(m.name + ", c = " + std::to_string(coefficient));
+            json scene = json::parse(R"({"simulation": {"frames": 48, "dx": 0.02}, "output": {"surface": false},
+                "colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "friction": 0.5},
+                              {"type": "sphere", "center": [0, 0.1, 0], "radius": 0.1,
+                               "dynamic": {"density": 1000, "velocity": [1, 0, 0], "angular_velocity": [0, 0, -10]}}]})");
+            scene["colliders"][1]["dynamic"]["rolling_resistance"] = coefficient;
+            scene["sets"] = json::array({farCube()});
+            auto sim = build(mpm::test::transformScene(scene, m));
+            double dtMax = 0.0;
+            while (sim->time() < 1.5 * v0 / a) {
+                dtMax = std::max(dtMax, sim->substep(1.0 / 240.0));
+                const RigidBodyState& s = sim->state().bodies[0];
+                const double t = sim->time(), v = m.vectorBack(s.velocity)[0];
+                ASSERT_LT(std::abs(m.vectorBack(s.spin)[2] * r + v), 1e-6) << "slipping at t = " << t;
+                const double expected = coefficient > 0.0 ? std::max(v0 - a * t, 0.0) : v0;
+                ASSERT_NEAR(v, expected, a * dtMax + 1e-9) << "t = " << t;
+            }
+            const Vec3d x = m.pointBack(sim->state().bodies[0].centre);
+            EXPECT_NEAR(x[0], coefficient > 0.0 ? stop : v0 * sim->time(), v0 * dtMax);
+            EXPECT_NEAR(x[1], r, kG * dtMax * dtMax);
+        }
+}
+
 TEST(RigidBody, AnAnimatedBodyFollowsItsKeyframesThenFliesOnFromTheirVelocity) {
     // A ball keyframed from (0, 1, 0) to (0.5, 1.5, 0), turning a quarter about z, over frames 0-12 (0.5 s at 24 fps),
     // animated until 0.3 s: until then it is where the keys put it (1, 1, 0) m/s and pi rad/s, whatever gravity says;
