@@ -162,12 +162,12 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
     float c = 0.0f, vmax = 0.0f;
     std::string stiffest;
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
-        const ParticleSetDesc& d = scene.sets[i];
-        const std::string where = "/sets/" + std::to_string(i);
+        const SetEntry set(scene, i);
+        const ParticleSetDesc& d = set.desc();
         SetBudget s;
         s.name = d.name;
         Vec3d lo, hi;
-        setExtent(scene, i, s.volume, lo, hi);
+        setExtent(set, s.volume, lo, hi);
         const double largestCoordinate = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
         const double expected = d.count > 0 ? double(d.count) : s.volume / cell * d.particlesPerCell;
         if (d.count > 0)
@@ -175,7 +175,7 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         else if (d.continuous)
             s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
         else if (countExactly && expected <= kSampleUpTo)
-            s.particles = (long long)sampleSet(scene, i).positions.size();
+            s.particles = (long long)sampleSet(set).positions.size();
         else
             s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
         s.emissions = d.continuous ? 1 : emissionsWithin(d, scene.frames);  // a stream's volume is its whole flow
@@ -207,7 +207,8 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         b.memoryBytes += total * (perRank + output) + double(s.particles) * sizeof(Vec3d) / (inParts ? ranks : 1);
         if (largestCoordinate / dx >= kMaxGridCoordinate) {
             std::ostringstream p;
-            p << where << "/shape: lies " << largestCoordinate << " m from the origin, beyond the grid's coordinate range of "
+            p << set.path("shape") << ": lies " << largestCoordinate
+              << " m from the origin, beyond the grid's coordinate range of "
               << "+-2^30 cells (" << kMaxGridCoordinate * dx << " m at dx = " << dx
               << " m); move it nearer the origin or use a larger dx";
             b.problems.push_back(p.str());
@@ -255,14 +256,14 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
             scene.colliders[i].shape);
         if (far / dx >= kMaxGridCoordinate) {
             std::ostringstream p;
-            p << "/colliders/" << i << ": lies " << far
+            p << ColliderEntry(scene, i).path() << ": lies " << far
               << " m from the origin, beyond the grid's coordinate range of +-2^30 cells (" << kMaxGridCoordinate * dx
               << " m at dx = " << dx << " m)";
             b.problems.push_back(p.str());
         }
     }
     // Every rank holds every collider's field whole.
-    for (std::size_t i = 0; i < scene.colliders.size(); ++i) b.colliderBytes += colliderFieldBytes(scene, i);
+    for (std::size_t i = 0; i < scene.colliders.size(); ++i) b.colliderBytes += colliderFieldBytes(ColliderEntry(scene, i));
     b.memoryBytes += b.colliderBytes;
     const MemoryLimit limit = memoryLimit();
     b.machineBytes = limit.bytes;

@@ -300,17 +300,18 @@ void lockWarnings(const SceneDesc& scene, const std::string& where, const Dynami
                            d.lockTranslation + "\"); that part is dropped");
 }
 
-/// Collider `index`; `pivot`, if given, receives the pivot its motion turns about (the scene's, or its centre), and
+/// The collider; `pivot`, if given, receives the pivot its motion turns about (the scene's, or its centre), and
 /// `warnings` what is worth a word about its field; `body`, what a dynamic collider is as a rigid body.
-std::unique_ptr<Collider> colliderOf(const SceneDesc& scene, std::size_t index, Vec3d* pivot = nullptr,
+std::unique_ptr<Collider> colliderOf(const ColliderEntry& collider, Vec3d* pivot = nullptr,
                                      std::vector<std::string>* warnings = nullptr, double* voxel = nullptr,
                                      std::optional<BodySpec>* body = nullptr) {
-    const ColliderDesc& c = scene.colliders[index];
+    const SceneDesc& scene = collider.scene;
+    const ColliderDesc& c = collider.desc();
     const auto motion = [&](const Vec3d& centre) {
         if (pivot) *pivot = c.motion.pivotGiven ? c.motion.pivot : centre;
         return motionOf(c.motion, centre, scene.settings.fps);
     };
-    const std::string where = "/colliders/" + std::to_string(index);
+    const std::string where = collider.path();
     if (const auto* v = std::get_if<VdbShape>(&c.shape); v && v->file.find("$F") != std::string::npos && !c.dynamic.enabled)
         return motion(Vec3d::Zero()), sequenceCollider(scene, where, c, *v);
     return std::visit(
@@ -399,8 +400,9 @@ struct SetRegionIn {
     Placement placement;
 };
 
-SetRegionIn regionOf(const SceneDesc& scene, std::size_t i) {
-    const std::string where = "/sets/" + std::to_string(i) + "/shape";
+SetRegionIn regionOf(const SetEntry& set) {
+    const SceneDesc& scene = set.scene;
+    const std::string where = set.path("shape");
     return std::visit(
         [&]<class S>(const S& shape) -> SetRegionIn {
             if constexpr (kFromFile<S>) {
@@ -423,14 +425,15 @@ SetRegionIn regionOf(const SceneDesc& scene, std::size_t i) {
                 return {SetRegion(shape), Placement{}};
             }
         },
-        scene.sets[i].shape);
+        set.desc().shape);
 }
 
 /// A point cloud set: one particle per point, placed; each fills its pscale's cube (2 pscale a side, the
 /// spacing of points made with radius pscale), or without radii the set's particles_per_cell.
-SetSamples pointCloudSet(const SceneDesc& scene, std::size_t i, const PointsShape& shape) {
-    const ParticleSetDesc& d = scene.sets[i];
-    const std::string where = "/sets/" + std::to_string(i) + "/shape/file";
+SetSamples pointCloudSet(const SetEntry& set, const PointsShape& shape) {
+    const SceneDesc& scene = set.scene;
+    const ParticleSetDesc& d = set.desc();
+    const std::string where = set.path("shape/file");
     PointCloudData cloud;
     try {
         cloud = readPlyPoints(besideScene(scene, shape.file));
@@ -438,8 +441,8 @@ SetSamples pointCloudSet(const SceneDesc& scene, std::size_t i, const PointsShap
         throw SceneError(scene.file + ": " + where + ": " + e.what());
     }
     if (d.count > 0 && (long long)cloud.x.size() != d.count)
-        throw SceneError(scene.file + ": /sets/" + std::to_string(i) + "/count: a point cloud gives one particle per point (" +
-                         std::to_string(cloud.x.size()) + " in " + shape.file + "); leave count out");
+        throw SceneError(set.at("count") + ": a point cloud gives one particle per point (" + std::to_string(cloud.x.size()) +
+                         " in " + shape.file + "); leave count out");
     const Placement& t = shape.transform;
     SetSamples out;
     out.positions = std::move(cloud.x);
@@ -476,11 +479,12 @@ SetSamples pointCloudSet(const SceneDesc& scene, std::size_t i, const PointsShap
 }  // namespace
 
 /// The set's shape sampled: positions, a point cloud's velocities, the volume.
-static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i, const SamplePart& part) {
-    const ParticleSetDesc& d = scene.sets[i];
+static SetSamples sampleSetShape(const SetEntry& set, const SamplePart& part) {
+    const SceneDesc& scene = set.scene;
+    const ParticleSetDesc& d = set.desc();
     if (const auto* points = std::get_if<PointsShape>(&d.shape)) {
         // A file is read whole; each part keeps its range of points.
-        SetSamples all = pointCloudSet(scene, i, *points);
+        SetSamples all = pointCloudSet(set, *points);
         if (part.parts <= 1) return all;
         const std::pair<std::size_t, std::size_t> range = part.range(all.positions.size());  // captured below: no binding
         const std::size_t begin = range.first, end = range.second;
@@ -492,15 +496,14 @@ static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i, const Sa
         return all;
     }
     if (d.continuous || isOutlet(d.shape)) throw std::logic_error("sampleSetShape: a continuous source is a stream (streamOf)");
-    const SetRegionIn r = regionOf(scene, i);
+    const SetRegionIn r = regionOf(set);
     const double s = r.placement.scale;
     // Sampled where the file's cells are dx / scale, then placed: the same particles wherever the asset is put.
     SetSamples out;
     try {
         out.positions = sampleShape(r.region, scene.settings.dx / s, d.particlesPerCell, d.count, d.sampling, d.seed, part);
     } catch (const std::length_error& e) {
-        throw SceneError(scene.file + ": /sets/" + std::to_string(i) + "/shape: " + e.what() +
-                         "; split the set into shorter ones");
+        throw SceneError(set.at("shape") + ": " + e.what() + "; split the set into shorter ones");
     }
     if (!r.placement.identity())
         for (Vec3d& x : out.positions) x = r.placement.apply(x);
@@ -509,8 +512,8 @@ static SetSamples sampleSetShape(const SceneDesc& scene, std::size_t i, const Sa
 }
 
 /// The set's initial velocities beyond its constant one: a rigid spin about the pivot, and a VDB field.
-static void addInitialVelocities(const SceneDesc& scene, std::size_t i, SetSamples& out, const Comm& comm) {
-    const ParticleSetDesc& d = scene.sets[i];
+static void addInitialVelocities(const SetEntry& set, SetSamples& out, const Comm& comm) {
+    const ParticleSetDesc& d = set.desc();
     if (d.angularVelocity.isZero() && d.velocityFile.empty()) return;
     const std::size_t n = out.positions.size();
     if (out.velocities.empty()) out.velocities.assign(n, Vec3f::Zero());
@@ -531,20 +534,20 @@ static void addInitialVelocities(const SceneDesc& scene, std::size_t i, SetSampl
         out.pivot = pivot;
     }
     if (!d.velocityFile.empty()) {
-        const std::string path = besideScene(scene, d.velocityFile);
+        const std::string path = besideScene(set.scene, d.velocityFile);
         try {
             const auto field = vdbVectorField(path, d.velocityGrid);
             VectorField::Sampler sample(*field);
             for (std::size_t p = 0; p < n; ++p) out.velocities[p] += sample.value(out.positions[p]).cast<float>();
         } catch (const LevelSetError& e) {
-            throw SceneError(scene.file + ": /sets/" + std::to_string(i) + "/velocity_field/file: " + e.what());
+            throw SceneError(set.at("velocity_field/file") + ": " + e.what());
         }
     }
 }
 
-SetSamples sampleSet(const SceneDesc& scene, std::size_t i, const Comm& comm, const std::atomic<int>* stop) {
-    SetSamples out = sampleSetShape(scene, i, SamplePart{comm.rank(), comm.size(), stop});
-    addInitialVelocities(scene, i, out, comm);
+SetSamples sampleSet(const SetEntry& set, const Comm& comm, const std::atomic<int>* stop) {
+    SetSamples out = sampleSetShape(set, SamplePart{comm.rank(), comm.size(), stop});
+    addInitialVelocities(set, out, comm);
     return out;
 }
 
@@ -566,9 +569,9 @@ auto withOutlet(const SetShape& shape, F&& f) {
 
 }  // namespace
 
-Emitter::Stream streamOf(const SceneDesc& scene, std::size_t i) {
-    const ParticleSetDesc& d = scene.sets[i];
-    const std::string where = scene.file + ": /sets/" + std::to_string(i);
+Emitter::Stream streamOf(const SetEntry& set) {
+    const ParticleSetDesc& d = set.desc();
+    const std::string where = set.at();
     const std::string type = std::visit([](const auto& s) { return std::string(s.kType); }, d.shape);
     if (!d.continuous)
         throw SceneError(where + "/shape: a " + type +
@@ -588,7 +591,7 @@ Emitter::Stream streamOf(const SceneDesc& scene, std::size_t i) {
                              " (velocity . normal > 0), got " + std::to_string(st.speed) + " m/s");
         // The particle spacing that gives the set's particles per cell; one layer per spacing of flow, every other
         // layer shifted by half a spacing (a body-centred stacking; the outlet lays out its layers).
-        st.spacing = scene.settings.dx / std::cbrt(d.particlesPerCell);
+        st.spacing = set.scene.settings.dx / std::cbrt(d.particlesPerCell);
         Vec3d u, w;
         outlet.sides(u, w);
         for (int layer = 0; layer < 2; ++layer)
@@ -601,12 +604,12 @@ Emitter::Stream streamOf(const SceneDesc& scene, std::size_t i) {
     });
 }
 
-void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo, Vec3d& hi) {
-    if (scene.sets[i].continuous || isOutlet(scene.sets[i].shape)) {
+void setExtent(const SetEntry& set, double& volume, Vec3d& lo, Vec3d& hi) {
+    const ParticleSetDesc& d = set.desc();
+    if (d.continuous || isOutlet(d.shape)) {
         // What flows in over the whole duration, and the column it would fill.
-        const ParticleSetDesc& d = scene.sets[i];
-        const Emitter::Stream st = streamOf(scene, i);
-        const double length = st.speed * double(d.durationFrames) / scene.settings.fps;
+        const Emitter::Stream st = streamOf(set);
+        const double length = st.speed * double(d.durationFrames) / set.scene.settings.fps;
         withOutlet(d.shape, [&](const auto& outlet) {
             volume = outlet.area() * length;
             const Vec3d r = Vec3d::Constant(outlet.reach()), end = outlet.centre + length * st.normal;
@@ -616,14 +619,14 @@ void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo,
         });
         return;
     }
-    if (const auto* points = std::get_if<PointsShape>(&scene.sets[i].shape)) {
-        const SetSamples s = pointCloudSet(scene, i, *points);
+    if (const auto* points = std::get_if<PointsShape>(&d.shape)) {
+        const SetSamples s = pointCloudSet(set, *points);
         volume = s.volume;
         lo = Vec3d::Constant(INFINITY), hi = Vec3d::Constant(-INFINITY);
         for (const Vec3d& x : s.positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
         return;
     }
-    const SetRegionIn r = regionOf(scene, i);
+    const SetRegionIn r = regionOf(set);
     const double s = r.placement.scale;
     volume = shapeVolume(r.region) * s * s * s;
     Vec3d a, b;
@@ -645,20 +648,20 @@ constexpr double kNoticeableShare = 0.01;
 constexpr double kMostlyInside = 0.5;
 
 /// The error of a set of which no particle fits its shape: the run refuses it, and so does validate.
-[[noreturn]] void noParticleFits(const SceneDesc& scene, std::size_t i) {
+[[noreturn]] void noParticleFits(const SetEntry& set) {
     std::ostringstream what;
-    what << scene.file << ": /sets/" << i << "/shape: no particle fits in the shape at dx = " << scene.settings.dx
+    what << set.at("shape") << ": no particle fits in the shape at dx = " << set.scene.settings.dx
          << " m (particles lie about dx / cbrt(particles_per_cell) apart: a shape thinner than that holds none); make it larger "
             "or dx smaller";
     throw SceneError(what.str());
 }
 
 /// Set i's word on when it enters: starting after the scene's last frame, it never appears.
-void entryWarnings(const SceneDesc& scene, std::size_t i, std::vector<std::string>& out) {
-    const int start = scene.sets[i].startFrame, frames = scene.frames;
+void entryWarnings(const SetEntry& set, std::vector<std::string>& out) {
+    const int start = set.desc().startFrame, frames = set.scene.frames;
     if (start <= frames) return;
-    out.push_back(scene.file + ": /sets/" + std::to_string(i) + "/start_frame: " + std::to_string(start) +
-                  " is after the scene's last frame (simulation.frames " + std::to_string(frames) +
+    out.push_back(set.at("start_frame") + ": " + std::to_string(start) + " is after the scene's last frame (simulation.frames " +
+                  std::to_string(frames) +
                   "; a set starting at F is in the files from file F on): the set never appears; give a start_frame of at most " +
                   std::to_string(frames) + " or more frames");
 }
@@ -666,16 +669,16 @@ void entryWarnings(const SceneDesc& scene, std::size_t i, std::vector<std::strin
 /// Set i's word on a viscous liquid that would act as a solid: its relaxation time K / G (at a shear rate of 1/s
 /// when flow_index is not 1) longer than a frame, so that the elasticity that keeps its step free of the viscosity
 /// shows in the animation (materials/HerschelBulkley.h; docs/method.md, section 5).
-void liquidWarnings(const SceneDesc& scene, std::size_t i, std::vector<std::string>& out) {
-    const ParticleSetDesc& d = scene.sets[i];
+void liquidWarnings(const SetEntry& set, std::vector<std::string>& out) {
+    const ParticleSetDesc& d = set.desc();
     const auto* p = std::get_if<HerschelBulkley::Params>(&d.params);
     if (!p) return;
-    const double shearModulus = double(p->shearModulus) * d.muScale, frame = 1.0 / scene.settings.fps;
+    const double shearModulus = double(p->shearModulus) * d.muScale, frame = 1.0 / set.scene.settings.fps;
     const double relaxation = double(p->viscosity) / shearModulus;
     if (!(relaxation > frame)) return;
     std::ostringstream s;
-    s << scene.file << ": /sets/" << i << "/material_params/viscosity: " << p->viscosity << " over the shear modulus "
-      << shearModulus << " Pa relaxes in " << relaxation << " s, longer than a frame (" << frame
+    s << set.at("material_params/viscosity") << ": " << p->viscosity << " over the shear modulus " << shearModulus
+      << " Pa relaxes in " << relaxation << " s, longer than a frame (" << frame
       << " s): the liquid will flow as an elastic solid that creeps, not as a liquid; raise shear_modulus (the time step "
          "shrinks with its square root) or lower the viscosity";
     out.push_back(s.str());
@@ -684,9 +687,10 @@ void liquidWarnings(const SceneDesc& scene, std::size_t i, std::vector<std::stri
 /// Set i's word on its own sampling (n particles in all) and on each collider it starts inside of: `inside[c]` of
 /// its particles lie inside collider c at its start.
 /// `estimated`: the counts come from a coarser sampling of the set (it is too large to sample whole).
-void setWarnings(const SceneDesc& scene, std::size_t i, long long n, const std::vector<long long>& inside,
-                 std::vector<std::string>& out, bool estimated = false) {
-    const std::string where = scene.file + ": /sets/" + std::to_string(i);
+void setWarnings(const SetEntry& set, long long n, const std::vector<long long>& inside, std::vector<std::string>& out,
+                 bool estimated = false) {
+    const SceneDesc& scene = set.scene;
+    const std::string where = set.at();
     if (n < kFewParticles)
         out.push_back(where + ": only " + std::to_string(n) +
                       " particles; so small a body is a few cells across (raise "
@@ -712,10 +716,10 @@ void setWarnings(const SceneDesc& scene, std::size_t i, long long n, const std::
     }
 }
 
-/// How many of `positions` lie inside each collider at set i's start.
-std::vector<long long> countInside(const SceneDesc& scene, std::size_t i, const std::vector<Vec3d>& positions,
+/// How many of `positions` lie inside each collider at the set's start.
+std::vector<long long> countInside(const SetEntry& set, const std::vector<Vec3d>& positions,
                                    const std::vector<std::unique_ptr<Collider>>& colliders) {
-    const double t0 = double(scene.sets[i].startFrame) / scene.settings.fps;
+    const double t0 = double(set.desc().startFrame) / set.scene.settings.fps;
     std::vector<long long> inside;
     for (const auto& c : colliders) {
         c->prepare(t0);  // a sequence loads the frames around t0
@@ -738,7 +742,8 @@ void overlapWarnings(const SceneDesc& scene, const std::vector<std::vector<Vec3d
     // A set given as points has no region to be inside of.
     std::vector<std::optional<SetRegionIn>> regions(n);
     for (std::size_t a = 0; a < n; ++a)
-        if (!positions[a].empty() && !std::holds_alternative<PointsShape>(scene.sets[a].shape)) regions[a] = regionOf(scene, a);
+        if (!positions[a].empty() && !std::holds_alternative<PointsShape>(scene.sets[a].shape))
+            regions[a] = regionOf(SetEntry(scene, a));
     for (std::size_t b = 0; b < n; ++b) {
         if (positions[b].empty()) continue;
         std::ostringstream named;
@@ -763,7 +768,7 @@ void overlapWarnings(const SceneDesc& scene, const std::vector<std::vector<Vec3d
                       << a << " (\"" << scene.sets[a].name << "\")";
         }
         if (overlaps == 0) continue;
-        out.push_back(scene.file + ": /sets/" + std::to_string(b) + "/shape: " + named.str() +
+        out.push_back(SetEntry(scene, b).at("shape") + ": " + named.str() +
                       (overlaps > kNamedOverlaps ? "; and inside " + std::to_string(overlaps - kNamedOverlaps) + " more sets"
                                                  : std::string()) +
                       ": " + (overlaps > 1 ? "they are" : "both are") + " emitted into the same space");
@@ -786,7 +791,7 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
     std::vector<std::unique_ptr<Collider>> colliders;
     for (std::size_t c = 0; c < scene.colliders.size(); ++c) {
         std::optional<BodySpec> body;
-        colliders.push_back(colliderOf(scene, c, nullptr, &out, nullptr, &body));
+        colliders.push_back(colliderOf(ColliderEntry(scene, c), nullptr, &out, nullptr, &body));
         if (!body) continue;
         const RigidBodyModel& m = body->model;
         if (bodies) {
@@ -803,17 +808,18 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
     }
     std::vector<std::vector<Vec3d>> positions(scene.sets.size());
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
-        const ParticleSetDesc& d = scene.sets[i];
+        const SetEntry set(scene, i);
+        const ParticleSetDesc& d = set.desc();
         if (!d.body.empty() && scene.settings.contact != ContactModel::MultiField)
-            out.push_back(scene.file + ": /sets/" + std::to_string(i) + "/body: \"" + d.body +
+            out.push_back(set.at("body") + ": \"" + d.body +
                           "\" names a body, but simulation.contact is single_field, where all bodies share one velocity field "
                           "(set it to multi_field)");
-        entryWarnings(scene, i, out);
-        liquidWarnings(scene, i, out);
+        entryWarnings(set, out);
+        liquidWarnings(set, out);
         if (d.continuous || isOutlet(d.shape)) continue;  // a stream enters over time
         double volume = 0.0;
         Vec3d lo, hi;
-        setExtent(scene, i, volume, lo, hi);
+        setExtent(set, volume, lo, hi);
         const double dx = scene.settings.dx,
                      expected = d.count > 0 ? double(d.count) : volume / (dx * dx * dx) * d.particlesPerCell;
         if (expected > kSampleUpTo) {
@@ -825,16 +831,16 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
             ParticleSetDesc& c = coarse.sets[i];
             c.particlesPerCell *= kCoarseSample / expected;
             if (c.count > 0) c.count = (long long)kCoarseSample;
-            const std::vector<Vec3d> few = sampleSet(coarse, i).positions;
+            const std::vector<Vec3d> few = sampleSet(SetEntry(coarse, i)).positions;
             if (few.empty()) continue;
-            std::vector<long long> inside = countInside(scene, i, few, colliders);
+            std::vector<long long> inside = countInside(set, few, colliders);
             for (long long& k : inside) k = std::llround(double(k) * expected / double(few.size()));
-            setWarnings(scene, i, (long long)expected, inside, out, true);
+            setWarnings(set, (long long)expected, inside, out, true);
             continue;
         }
-        positions[i] = sampleSet(scene, i).positions;
-        if (positions[i].empty()) noParticleFits(scene, i);
-        setWarnings(scene, i, (long long)positions[i].size(), countInside(scene, i, positions[i], colliders), out);
+        positions[i] = sampleSet(set).positions;
+        if (positions[i].empty()) noParticleFits(set);
+        setWarnings(set, (long long)positions[i].size(), countInside(set, positions[i], colliders), out);
     }
     overlapWarnings(scene, positions, out);
     return out;
@@ -870,8 +876,8 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
                     watch.note("building the distance field of collider " + std::to_string(i) + " (" + s.file + ")");
             },
             scene.colliders[i].shape);
-        colliders.push_back(
-            colliderOf(scene, i, &found.colliderPivot[i], &found.warnings, &found.colliderVoxel[i], &bodySpecs[i]));
+        colliders.push_back(colliderOf(ColliderEntry(scene, i), &found.colliderPivot[i], &found.warnings, &found.colliderVoxel[i],
+                                       &bodySpecs[i]));
     }
     const SpeciesLayout layout = speciesLayout(scene);
     // Bodies, numbered in order of first appearance: a set's `body` name, or else its own name.
@@ -884,9 +890,10 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         if (at == bodies.end()) bodies.push_back(name);
     }
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
-        const ParticleSetDesc& d = scene.sets[i];
-        entryWarnings(scene, i, found.warnings);
-        liquidWarnings(scene, i, found.warnings);
+        const SetEntry set(scene, i);
+        const ParticleSetDesc& d = set.desc();
+        entryWarnings(set, found.warnings);
+        liquidWarnings(set, found.warnings);
         AnyMaterialParams params = d.params;
         visitMaterialParams(params, [&]<class M>(typename M::Params& p) { M::scaleStiffness(p, d.lambdaScale, d.muScale); });
         const int species = sim->addSpecies(makeSpecies(d.name, params), bodyOf[i]);
@@ -898,7 +905,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         if (d.continuous || isOutlet(d.shape)) {
             // A stream: each particle is one spacing cube of the material.
             e.continuous = true;
-            e.stream = streamOf(scene, i);
+            e.stream = streamOf(set);
             e.velocity = d.velocity;
             // A layer carries one spacing of flow through the disc: its area times the spacing, shared by its points.
             const double perLayer = 0.5 * double(e.stream.layers[0].size() + e.stream.layers[1].size());
@@ -912,7 +919,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         }
         asked.checkStop();
         watch.note("sampling set " + std::to_string(i) + " '" + d.name + "'");
-        SetSamples samples = sampleSet(scene, i, comm, watch.stop);
+        SetSamples samples = sampleSet(set, comm, watch.stop);
         found.setPivot[i] = samples.pivot;
         e.positions = std::move(samples.positions);
         long long total = (long long)e.positions.size();
@@ -925,10 +932,10 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
             e.first = std::accumulate(sizes.begin(), sizes.begin() + comm.rank(), 0LL);
             e.total = total = std::accumulate(sizes.begin(), sizes.end(), 0LL);
         }
-        if (total == 0) noParticleFits(scene, i);
-        std::vector<long long> inside = countInside(scene, i, e.positions, colliders);
+        if (total == 0) noParticleFits(set);
+        std::vector<long long> inside = countInside(set, e.positions, colliders);
         for (long long& k : inside) k = comm.sum(k);
-        setWarnings(scene, i, total, inside, found.warnings);
+        setWarnings(set, total, inside, found.warnings);
         e.velocity = d.velocity;
         e.velocities = std::move(samples.velocities);
         // A rigid spin's velocity gradient, [w]x: the affine velocity APIC carries for it.
@@ -957,9 +964,10 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
     return sim;
 }
 
-double colliderFieldBytes(const SceneDesc& scene, std::size_t i) {
-    const ColliderDesc& c = scene.colliders[i];
-    const std::string where = "/colliders/" + std::to_string(i);
+double colliderFieldBytes(const ColliderEntry& collider) {
+    const SceneDesc& scene = collider.scene;
+    const ColliderDesc& c = collider.desc();
+    const std::string where = collider.path();
     const double dx = scene.settings.dx;
     return std::visit(
         [&]<class S>(const S& shape) -> double {
@@ -991,11 +999,11 @@ DerivedValues deriveValues(const SceneDesc& scene) {
     DerivedValues out;
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const ParticleSetDesc& d = scene.sets[i];
-        out.setPivot.push_back(d.angularVelocity.isZero() || d.continuous || isOutlet(d.shape) ? std::nullopt
-                                                                                               : sampleSet(scene, i).pivot);
+        out.setPivot.push_back(
+            d.angularVelocity.isZero() || d.continuous || isOutlet(d.shape) ? std::nullopt : sampleSet(SetEntry(scene, i)).pivot);
     }
     for (std::size_t i = 0; i < scene.colliders.size(); ++i)
-        colliderOf(scene, i, &out.colliderPivot.emplace_back(), nullptr, &out.colliderVoxel.emplace_back());
+        colliderOf(ColliderEntry(scene, i), &out.colliderPivot.emplace_back(), nullptr, &out.colliderVoxel.emplace_back());
     return out;
 }
 

@@ -40,15 +40,14 @@ struct SetSamples {
 /// stays the whole set's): a Poisson-disk set given by its density samples only its part's tiles.
 /// Collective on `comm`.
 /// A nonzero *stop gives up the sampling (Interrupted) within milliseconds.
-SetSamples sampleSet(const SceneDesc& scene, std::size_t i, const Comm& comm = Comm::single(),
-                     const std::atomic<int>* stop = nullptr);
+SetSamples sampleSet(const SetEntry& set, const Comm& comm = Comm::single(), const std::atomic<int>* stop = nullptr);
 
 /// A continuous set's stream: the layers that enter through its disc (throws SceneError for a set that cannot
 /// be one: not a disc, no velocity out through it).
-Emitter::Stream streamOf(const SceneDesc& scene, std::size_t i);
+Emitter::Stream streamOf(const SetEntry& set);
 
-/// Set `i`'s volume and its bounds in the scene, without sampling it (reads its file, if it has one).
-void setExtent(const SceneDesc& scene, std::size_t i, double& volume, Vec3d& lo, Vec3d& hi);
+/// The set's volume and its bounds in the scene, without sampling it (reads its file, if it has one).
+void setExtent(const SetEntry& set, double& volume, Vec3d& lo, Vec3d& hi);
 
 /// Sets expected to hold more particles than this are not sampled by validate (to count them, or to look for
 /// overlaps): it answers in seconds whatever the scene's size.
@@ -88,7 +87,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
 /// About how many bytes collider `i`'s distance field takes while it is built and used: a mesh's from its surface at
 /// the voxel the builder picks (io/LevelSets.h, meshFieldBytes), a VDB file's from its grid's metadata (vdbFieldBytes);
 /// 0 for a shape with a formula. Reads the collider's file; a mesh whose field could not fit this machine is refused.
-double colliderFieldBytes(const SceneDesc& scene, std::size_t i);
+double colliderFieldBytes(const ColliderEntry& collider);
 
 /// What buildSimulation would derive, without building it: the colliders are made and the spinning sets sampled.
 DerivedValues deriveValues(const SceneDesc& scene);

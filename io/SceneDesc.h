@@ -113,4 +113,31 @@ struct SceneDesc {
     std::string resolvedJson;  ///< the scene with every default filled in
 };
 
+/// One entry of a scene's list `kList` ("sets" or "colliders"), as set-up code passes it around: the entry, and
+/// where its keys are in the scene file, for messages ("FILE: /sets/2/shape: what is wrong").
+template <const char* kList>
+struct SceneEntry {
+    SceneEntry(const SceneDesc& s, std::size_t i) : scene(s), index(i) {}
+    const SceneDesc& scene;
+    std::size_t index;
+    /// The JSON path of one of its keys ("/sets/2/shape/file"), or of the entry itself.
+    std::string path(const std::string& key = {}) const {
+        return "/" + std::string(kList) + "/" + std::to_string(index) + (key.empty() ? "" : "/" + key);
+    }
+    /// The scene file and that path, as a message starts: "FILE: /sets/2/shape".
+    std::string at(const std::string& key = {}) const { return scene.file + ": " + path(key); }
+};
+inline constexpr char kSetsList[] = "sets";
+inline constexpr char kCollidersList[] = "colliders";
+/// A particle set of a scene.
+struct SetEntry : SceneEntry<kSetsList> {
+    using SceneEntry::SceneEntry;
+    const ParticleSetDesc& desc() const { return scene.sets[index]; }
+};
+/// A collider of a scene.
+struct ColliderEntry : SceneEntry<kCollidersList> {
+    using SceneEntry::SceneEntry;
+    const ColliderDesc& desc() const { return scene.colliders[index]; }
+};
+
 }  // namespace mpm
