@@ -73,10 +73,8 @@ struct Contact {
     double mu;                         ///< Coulomb coefficient, infinite for a sticky collider
     double restitution = 0.0;          ///< separating over approaching speed
     double target = 0.0;               ///< the normal velocity the contact seeks: the gap's closing, or a bounce
-    double rolling = 0.0;              ///< rolling resistance coefficient
     double normal = 0.0;               ///< accumulated normal impulse
     Vec3d tangential = Vec3d::Zero();  ///< accumulated friction impulse
-    Vec3d couple = Vec3d::Zero();      ///< accumulated rolling-resistance angular impulse on a
 };
 
 /// One side of the contacts: its state and how an impulse changes its velocities (nothing, for a fixed collider).
@@ -102,14 +100,16 @@ struct Side {
 /// added to it (`stepGravity`, the change gravity made in the relative velocity). Position-first Euler brings a body
 /// back to a height at g dt more than the speed it left at, so bouncing the approach with the step's gravity in it
 /// keeps a resting body hopping: at e g dt / (1 - e), beyond any fixed threshold as e nears 1. Returns the work the
-/// contacts' moving colliders did on a: each one's impulse times its velocity (zero between bodies).
+/// contacts' moving colliders did on a: each one's impulse times its velocity (zero between bodies). `rolling`: the
+/// rolling resistance coefficient of the pair.
 /// Sequential-impulse sweeps: at least kMinSweeps, then until the largest change of an impulse in a sweep is under
 /// kConverged of the largest normal impulse, or kMaxSweeps. A faceted ball (r = 10 voxels) landing at 2.5 m/s kept
 /// 1.1 rad/s of spin after 8 sweeps, 0.48 after 32, 0.06 after 128 and none after 256.
 constexpr int kMinSweeps = 8, kMaxSweeps = 256;
 constexpr double kConverged = 1e-6;
 
-double solveContacts(Side a, Side b, std::vector<Contact>& contacts, double dt, double restingSpeed, const Vec3d& stepGravity) {
+double solveContacts(Side a, Side b, std::vector<Contact>& contacts, double dt, double restingSpeed, const Vec3d& stepGravity,
+                     double rolling) {
     const auto push = [&](const Contact& c, const Vec3d& J) {
         a.s.velocity += a.invMass.cwiseProduct(J);
         a.s.spin += a.invI * c.ra.cross(J);
@@ -141,26 +141,46 @@ double solveContacts(Side a, Side b, std::vector<Contact>& contacts, double dt, 
         c.tangential = tangential;
         return change;
     };
-    // Rolling resistance: a couple against the relative spin about axes in the contact plane, at most the rolling
-    // coefficient times the normal impulse times the lever (the centre's height over the contact; a ball's radius).
-    // A couple moves no centre, so momentum is untouched; friction then keeps the contact from slipping.
-    const auto resistRolling = [&](Contact& c) {
+    // Rolling resistance: one couple for the whole set of contacts, against the relative spin about axes in the plane
+    // of their mean normal, at most `rolling` times their summed normal impulse times their mean lever (the centre's
+    // height over the contacts: a ball's radius), both weighted by the normal impulses: the normal force acting c h
+    // ahead of the contact. A couple moves no centre, so momentum is untouched, and friction then keeps the contact
+    // from slipping while it can (c < 1.4 mu for a ball).
+    Vec3d couple = Vec3d::Zero();
+    const auto resistRolling = [&] {
+        Vec3d normals = Vec3d::Zero();
+        double load = 0.0, moment = 0.0;
+        for (const Contact& c : contacts) {
+            normals += c.normal * c.n;
+            load += c.normal;
+            moment += c.normal * std::abs(c.ra.dot(c.n));
+        }
+        const double spread = normals.norm();
+        if (!(load > 0.0) || !(spread > 0.0) || !(moment > 0.0)) return 0.0;
+        const Vec3d n = normals / spread;
+        const double lever = moment / load;
         Vec3d roll = a.s.spin - b.s.spin;
-        roll -= roll.dot(c.n) * c.n;
+        roll -= roll.dot(n) * n;
         const double rate = roll.norm();
         if (!(rate > 0.0)) return 0.0;
         const Vec3d axis = roll / rate;
+        // A patch of pressed points wider than the couple's offset, c h either side, along the way it rolls (a face)
+        // holds by its own normal forces; the couple on top of them left the solve free to shift the load among its points, and
+        // the face's friction with it, which turned a sliding box about the vertical.
+        const Vec3d ahead = axis.cross(n);
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (const Contact& c : contacts)
+            if (c.normal > 0.0) lo = std::min(lo, c.ra.dot(ahead)), hi = std::max(hi, c.ra.dot(ahead));
+        if (hi - lo > 2.0 * rolling * lever) return 0.0;
         const double k = axis.dot(a.invI * axis) + axis.dot(b.invI * axis);
         if (!(k > 0.0)) return 0.0;
-        const double lever = std::abs(c.ra.dot(c.n));
-        if (!(lever > 0.0)) return 0.0;
-        Vec3d couple = c.couple - (rate / k) * axis;
-        const double limit = c.rolling * c.normal * lever;
-        if (couple.norm() > limit) couple *= limit / couple.norm();
-        a.s.spin += a.invI * (couple - c.couple);
-        b.s.spin -= b.invI * (couple - c.couple);
-        const double change = (couple - c.couple).norm() / lever;  // as an impulse, for the convergence test
-        c.couple = couple;
+        Vec3d next = couple - (rate / k) * axis;
+        const double limit = rolling * load * lever;
+        if (next.norm() > limit) next *= limit / next.norm();
+        a.s.spin += a.invI * (next - couple);
+        b.s.spin -= b.invI * (next - couple);
+        const double change = (next - couple).norm() / lever;  // as an impulse, for the convergence test
+        couple = next;
         return change;
     };
     for (Contact& c : contacts) {
@@ -184,8 +204,8 @@ double solveContacts(Side a, Side b, std::vector<Contact>& contacts, double dt, 
             largest = std::max(largest, normal);
             c.normal = normal;
             change = std::max(change, resistSliding(c));
-            if (c.rolling > 0.0) change = std::max(change, resistRolling(c));
         }
+        if (rolling > 0.0) change = std::max(change, resistRolling());
         if (sweep + 1 >= kMinSweeps && change <= kConverged * largest) break;
     }
     // Apart along the normals, the deepest first in effect: each contact pushes what is left. Against a fixed
@@ -238,14 +258,13 @@ int RigidBodyModel::touch(RigidBodyState& s, const std::vector<FixedCollider>& f
             Contact contact{.ra = q - s.centre, .rb = Vec3d::Zero(), .n = n, .depth = -phi, .mu = frictionOf(*c)};
             contact.vc = c->velocity(q, t);
             contact.restitution = std::max(restitution, f.restitution);
-            contact.rolling = rollingResistance;
             contacts.push_back(contact);
         }
     }
     if (contacts.empty()) return 0;
     RigidBodyState still;
-    work =
-        solveContacts(Side(s, *this), Side(still), contacts, dt, restingSpeed(gravity, dt), dt * gravity.cwiseProduct(moveFree));
+    work = solveContacts(Side(s, *this), Side(still), contacts, dt, restingSpeed(gravity, dt),
+                         dt * gravity.cwiseProduct(moveFree), rollingResistance);
     return int(contacts.size());
 }
 
@@ -276,20 +295,15 @@ int touchBodies(const RigidBodyModel& A, RigidBodyState& a, const Collider& coll
             if (!(phi < closing)) continue;
             const Vec3d n = into.normal(p, t);
             const Vec3d q = p - M.contactRadii[i] * n;
-            contacts.push_back(Contact{.ra = q - a.centre,
-                                       .rb = q - b.centre,
-                                       .n = sign * n,
-                                       .depth = -phi,
-                                       .mu = friction,
-                                       .restitution = bounce,
-                                       .rolling = rolling});
+            contacts.push_back(Contact{
+                .ra = q - a.centre, .rb = q - b.centre, .n = sign * n, .depth = -phi, .mu = friction, .restitution = bounce});
         }
     };
     sample(A, a, colliderB, 1.0);
     sample(B, b, colliderA, -1.0);
     if (contacts.empty()) return 0;
     solveContacts(Side(a, A), Side(b, B), contacts, dt, restingSpeed(gravity, dt),
-                  dt * (gravity.cwiseProduct(A.moveFree) - gravity.cwiseProduct(B.moveFree)));
+                  dt * (gravity.cwiseProduct(A.moveFree) - gravity.cwiseProduct(B.moveFree)), rolling);
     return int(contacts.size());
 }
 
