@@ -513,31 +513,35 @@ TEST(RigidBody, RollingResistanceSlowsARollingBallAtCGOverOnePlusIOverMR2) {
 }
 
 TEST(RigidBody, RollingResistanceLeavesASlidingBoxSlidingStraight) {
-    // A cube (0.2 m) sliding at 2 m/s along x on a floor of friction 0.3 with rolling_resistance 0.1 slows at mu g =
-    // 2.943 m/s^2 as without it, to one step's change, and keeps its heading: applied contact by contact, the couples
-    // met the face's friction in the sweep's order and turned it (a new user's trial: 6.5 degrees, 2 cm sideways).
+    // A cube (0.2 m) sliding at 2 m/s along x on a floor of friction 0.3 with rolling_resistance 0.1 or 1 slows at
+    // mu g = 2.943 m/s^2 as without it, to one step's change, and keeps its heading: a face resists rolling by its
+    // normal forces (new users' trials: contact by contact the couples turned it 6.5 degrees at c = 0.1; bounded by
+    // the offset c h alone, 41 degrees at c = 1).
     // In the placements of tests/SceneVariants.h.
     const double mu = 0.3, v0 = 2.0, h = 0.1;
-    for (const RigidMap& m : mpm::test::sceneVariants(0.02)) {
-        SCOPED_TRACE(m.name);
-        json scene = json::parse(R"({"simulation": {"frames": 24, "dx": 0.02}, "output": {"surface": false},
+    for (const double coefficient : {0.1, 1.0})
+        for (const RigidMap& m : mpm::test::sceneVariants(0.02)) {
+            SCOPED_TRACE(m.name + ", c = " + std::to_string(coefficient));
+            json scene = json::parse(R"({"simulation": {"frames": 24, "dx": 0.02}, "output": {"surface": false},
             "colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "friction": 0.3},
                           {"type": "box", "center": [0, 0.1, 0], "size": [0.2, 0.2, 0.2],
                            "dynamic": {"density": 500, "velocity": [2, 0, 0], "rolling_resistance": 0.1}}]})");
-        scene["sets"] = json::array({farCube()});
-        auto sim = build(mpm::test::transformScene(scene, m));
-        double dtMax = 0.0;
-        while (sim->time() < 0.9 * v0 / (mu * kG)) {
-            dtMax = std::max(dtMax, sim->substep(1.0 / 240.0));
+            scene["colliders"][1]["dynamic"]["rolling_resistance"] = coefficient;
+            scene["sets"] = json::array({farCube()});
+            auto sim = build(mpm::test::transformScene(scene, m));
+            double dtMax = 0.0;
+            while (sim->time() < 0.9 * v0 / (mu * kG)) {
+                dtMax = std::max(dtMax, sim->substep(1.0 / 240.0));
+                const RigidBodyState& s = sim->state().bodies[0];
+                ASSERT_NEAR(m.vectorBack(s.velocity)[0], v0 - mu * kG * sim->time(), mu * kG * dtMax + 1e-9)
+                    << "t = " << sim->time();
+            }
             const RigidBodyState& s = sim->state().bodies[0];
-            ASSERT_NEAR(m.vectorBack(s.velocity)[0], v0 - mu * kG * sim->time(), mu * kG * dtMax + 1e-9) << "t = " << sim->time();
+            const Vec3d x = m.pointBack(s.centre);
+            EXPECT_LT(std::abs(x[2]), 1e-6) << "sideways";
+            EXPECT_NEAR(x[1], h, kG * dtMax * dtMax);
+            EXPECT_LT(Eigen::AngleAxisd(s.orientation).angle(), 1e-6) << "turned";
         }
-        const RigidBodyState& s = sim->state().bodies[0];
-        const Vec3d x = m.pointBack(s.centre);
-        EXPECT_LT(std::abs(x[2]), 1e-6) << "sideways";
-        EXPECT_NEAR(x[1], h, kG * dtMax * dtMax);
-        EXPECT_LT(Eigen::AngleAxisd(s.orientation).angle(), 1e-6) << "turned";
-    }
 }
 
 TEST(RigidBody, AnAnimatedBodyFollowsItsKeyframesThenFliesOnFromTheirVelocity) {
