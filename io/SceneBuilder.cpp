@@ -803,6 +803,7 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
               << m.restCentre[0] << ", " << m.restCentre[1] << ", " << m.restCentre[2] << ") m, principal moments of inertia "
               << principal.eigenvalues()[0] << ", " << principal.eigenvalues()[1] << ", " << principal.eigenvalues()[2]
               << " kg m^2";
+            if (m.rollingResistance > 0.0) s << ", rolling resistance " << m.rollingResistance;
             bodies->push_back(s.str());
         }
     }

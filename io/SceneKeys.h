@@ -372,10 +372,12 @@ void dynamicKeys(V& v, DynamicDesc& d) {
     v.number(Key{.name = "rolling_resistance",
                  .help = "coefficient of rolling resistance against colliders and other bodies (the larger of two bodies'): "
                          "rolling meets a couple of this times the normal force times the centre's height over the contact, "
-                         "so a ball rolling on a floor slows at c g / (1 + I / (m r^2)); 0 rolls on for ever, as a rigid "
-                         "ball on a rigid floor does (an irregular rock rocks on its faces); about 0.001 for steel on steel, "
-                         "0.01-0.05 for a ball on a hard floor, 0.1-0.3 on grass, sand or soil (not with the material, "
-                         "whose contact is the grid's)",
+                         "so a ball rolling on a floor slows at c g / (1 + I / (m r^2)) while friction keeps it rolling "
+                         "(c <= 1.4 mu for a ball); it acts where a body rolls (a ball's point, a cylinder's line, a rounded "
+                         "rock's few points: a face resists by its own normal forces, and a box on an edge is held within "
+                         "atan(c) of balance); 0 rolls on for ever, as a rigid ball on a rigid floor does (an irregular rock "
+                         "rocks on its faces); about 0.001 for steel on steel, 0.01-0.05 for a ball on a hard floor, 0.1-0.3 "
+                         "on grass, sand or soil (not with the material, whose contact is the grid's)",
                  .lo = 0.0,
                  .hi = 1.0},
              d.rollingResistance);

@@ -859,6 +859,13 @@ TEST(RigidBody, ValidateStatesEachBodysMassAndWarnsOfVelocityAlongALockedAxis) {
     EXPECT_EQ(bodies[0],
               "collider 0 (ball): a rigid body of 4.189 kg, centre of mass (0.3, 0.5, 0.2) m, principal moments of "
               "inertia 0.01676, 0.01676, 0.01676 kg m^2");
+    // Its rolling resistance, when it has one (a trial found it only in --print-scene).
+    json rolling = scene;
+    rolling["colliders"][0]["dynamic"]["rolling_resistance"] = 0.05;
+    bodies.clear();
+    EXPECT_EQ(sceneWarnings(parseScene(rolling.dump(), "/tmp/rigid_body_validate.json"), &bodies).size(), 1u);
+    ASSERT_EQ(bodies.size(), 1u);
+    EXPECT_NE(bodies[0].find("kg m^2, rolling resistance 0.05"), std::string::npos) << bodies[0];
     ASSERT_EQ(warnings.size(), 1u);
     EXPECT_NE(warnings[0].find("/colliders/0/dynamic/angular_velocity: turns about an axis lock_rotation holds (\"x\")"),
               std::string::npos)
