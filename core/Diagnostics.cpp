@@ -45,7 +45,7 @@ ParticleSums sumParticles(const std::vector<AnySpecies>& species, double dx, flo
                             // APIC's kinetic energy includes the affine part, 1/2 m D |C|^2 (B = C D): a spinning
                             // body keeps part of its energy there, and hands it to v when it flies apart.
                             acc.sum[kKinetic] += 0.5 * m * (v.squaredNorm() + (B.array() * P.C[i].cast<double>().array()).sum());
-                            acc.sum[kElastic] += P.volume0[i] * M::energyDensity(sp.params, sp.state, i);
+                            acc.sum[kElastic] += P.volume0[i] * M::energyDensity(sp.paramsOf(i), sp.state, i);
                             acc.sum[kGravity] += -m * gravity.dot(P.x[i]);
                             acc.maxSpeed = std::max(acc.maxSpeed, v.norm());
                             const double J = M::volumeRatio(sp.state, i);

@@ -54,7 +54,7 @@ struct SimState : SimProgress {
         for (const AnySpecies& s : species)
             std::visit(
                 [&](const auto& sp) {
-                    out.species.emplace_back(std::decay_t<decltype(sp)>{sp.name, sp.params, {}, {}, {}});
+                    out.species.emplace_back(std::decay_t<decltype(sp)>{sp.name, sp.params, {}, {}, {}, sp.perParticle, {}});
                 },
                 s);
         return out;

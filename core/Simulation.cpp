@@ -64,6 +64,12 @@ void Simulation::restore(SimState state, bool share) {
     for (std::size_t s = 0; s < state.species.size(); ++s)
         if (state.species[s].index() != state_.species[s].index())
             throw std::invalid_argument("restore: species " + std::to_string(s) + " has another material");
+        else if (std::visit([](const auto& sp) { return sp.perParticle; }, state.species[s]) !=
+                 std::visit([](const auto& sp) { return sp.perParticle; }, state_.species[s]))
+            throw std::invalid_argument("restore: species " + std::to_string(s) +
+                                        (std::visit([](const auto& sp) { return sp.perParticle; }, state.species[s])
+                                             ? " has parameters per particle, which the scene does not give"
+                                             : " has no parameters per particle, which the scene gives"));
     for (const Emitter& e : emitters_)
         if (e.released && state.emittedFrame < e.lastEmission())
             throw std::logic_error("restore: an emitter whose samples were released would emit again; restore before emitting");

@@ -12,6 +12,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,8 @@ struct Emitter {
     Mat3f affine = Mat3f::Zero();
     float mass = 0.0f, volume = 0.0f;    ///< per particle
     std::vector<float> masses, volumes;  ///< particle by particle (a point cloud's), instead of mass, volume; empty: none
+    /// Material parameters particle by particle, for a species that has them (Species::perParticle).
+    std::optional<AnyParamsArray> local;
     int startFrame = 0;
     int durationFrames = 1;  ///< emissions happen in [startFrame, startFrame + durationFrames)
     int pauseFrames = 0;     ///< frames skipped between two emissions
@@ -114,10 +117,11 @@ public:
     int addSpecies(AnySpecies species, int body = 0);
     /// Appends particles at rest state (F = I, J = 1, C = 0) and gives them fresh ids.
     /// `perParticle`, when not empty, is added to v particle by particle; `masses` and `volumes`, when not
-    /// empty, replace mass and volume particle by particle.
+    /// empty, replace mass and volume particle by particle. A species with parameters per particle takes
+    /// them from `local` (one per particle), and only such a species.
     void addParticles(int species, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
                       const std::vector<Vec3f>& perParticle = {}, const std::vector<float>& masses = {},
-                      const std::vector<float>& volumes = {});
+                      const std::vector<float>& volumes = {}, const AnyParamsArray* local = nullptr);
     void addCollider(std::unique_ptr<Collider> c) { colliders_.push_back(std::move(c)); }
     /// A rigid body the material moves (core/RigidBody.h): `c` must move by Motion::dynamic(frame), which this
     /// simulation poses before each substep's collider passes. It starts in `initial`.
@@ -306,7 +310,7 @@ private:
     void setAffine(const Emitter& e, std::size_t from);
     void appendParticles(int species, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
                          const std::vector<Vec3f>& perParticle, const std::vector<float>& masses,
-                         const std::vector<float>& volumes, const std::vector<int32_t>& ids);
+                         const std::vector<float>& volumes, const std::vector<int32_t>& ids, const AnyParamsArray* local);
     /// Calls fn(grid, species) for field f with the species that scatter into it, in species order (with one
     /// field, all of them in place; otherwise they are moved into a scratch list and back, pointers only).
     template <class Fn>

@@ -29,7 +29,7 @@ int Simulation::addSpecies(AnySpecies species, int body) {
 
 void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
                               const std::vector<Vec3f>& perParticle, const std::vector<float>& masses,
-                              const std::vector<float>& volumes) {
+                              const std::vector<float>& volumes, const AnyParamsArray* local) {
     if ((!perParticle.empty() && perParticle.size() != x.size()) || (!masses.empty() && masses.size() != x.size()) ||
         (!volumes.empty() && volumes.size() != x.size()))
         throw std::logic_error("addParticles: one velocity, mass or volume per particle, or none");
@@ -53,9 +53,11 @@ void Simulation::addParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v
         const std::vector<Vec3f> kv = pick(perParticle);
         const std::vector<float> km = pick(masses), kvol = pick(volumes);
         const std::vector<int32_t> kid = pick(ids);
-        appendParticles(s, kx, v, mass, volume, set, kv, km, kvol, kid);
+        std::optional<AnyParamsArray> kept;
+        if (local) kept = std::visit([&](const auto& all) { return AnyParamsArray(pick(all)); }, *local);
+        appendParticles(s, kx, v, mass, volume, set, kv, km, kvol, kid, kept ? &*kept : nullptr);
     } else {
-        appendParticles(s, x, v, mass, volume, set, perParticle, masses, volumes, ids);
+        appendParticles(s, x, v, mass, volume, set, perParticle, masses, volumes, ids, local);
     }
     state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, fastest);
 }
@@ -72,7 +74,8 @@ void Simulation::emitPart(const Emitter& e) {
     for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = int32_t(state_.nextId + e.first + (long long)i);
     state_.nextId += int32_t(e.total);
     const std::size_t before = particlesOf(state_.species.at(std::size_t(e.species))).size();
-    appendParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes, ids);
+    appendParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes, ids,
+                    e.local ? &*e.local : nullptr);
     setAffine(e, before);
     state_.bounds.maxSpeed = std::max(state_.bounds.maxSpeed, fastest);
     if (partitioned_) sendEmittedToOwners(e.species, before);
@@ -87,7 +90,8 @@ void Simulation::setAffine(const Emitter& e, std::size_t from) {
 
 void Simulation::appendParticles(int s, const std::vector<Vec3d>& x, const Vec3f& v, float mass, float volume, uint16_t set,
                                  const std::vector<Vec3f>& perParticle, const std::vector<float>& masses,
-                                 const std::vector<float>& volumes, const std::vector<int32_t>& ids) {
+                                 const std::vector<float>& volumes, const std::vector<int32_t>& ids,
+                                 const AnyParamsArray* local) {
     std::visit(
         [&](auto& sp) {
             using M = typename std::decay_t<decltype(sp)>::Material;
@@ -107,11 +111,21 @@ void Simulation::appendParticles(int s, const std::vector<Vec3d>& x, const Vec3f
                 P.volume0.insert(P.volume0.end(), volumes.begin(), volumes.end());
             P.set.resize(n0 + n, set);
             P.id.insert(P.id.end(), ids.begin(), ids.end());
+            using Params = typename M::Params;
+            const auto* own = local ? std::get_if<std::vector<Params>>(local) : nullptr;
+            if (sp.perParticle != bool(own) || (own && own->size() != n))
+                throw std::logic_error(
+                    "appendParticles: parameters per particle, one each, for a species that has them and only then");
+            if (own) sp.local.insert(sp.local.end(), own->begin(), own->end());
             // A model whose rest state depends on its parameters (sand's cone) takes them.
-            if constexpr (requires { sp.state.appendRest(n, sp.params); })
-                sp.state.appendRest(n, sp.params);
-            else
+            if constexpr (requires { sp.state.appendRest(n, sp.params); }) {
+                if (own)
+                    for (std::size_t i = 0; i < n; ++i) sp.state.appendRest(1, (*own)[i]);
+                else
+                    sp.state.appendRest(n, sp.params);
+            } else {
                 sp.state.appendRest(n);
+            }
             float& key = state_.bounds.minStiffnessKey[s];
             for (std::size_t i = n0; i < n0 + n; ++i) key = std::min(key, M::stiffnessKey(sp.state, i));
         },
@@ -130,7 +144,8 @@ void Simulation::emitDue() {
                 emitPart(e);
             } else {
                 const std::size_t before = particlesOf(state_.species.at(std::size_t(e.species))).size();
-                addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes);
+                addParticles(e.species, e.positions, e.velocity, e.mass, e.volume, e.set, e.velocities, e.masses, e.volumes,
+                             e.local ? &*e.local : nullptr);
                 setAffine(e, before);
             }
             // Emitted for the last time: its samples (24 bytes a particle and more, on every rank) are not needed again.
@@ -139,6 +154,7 @@ void Simulation::emitDue() {
                 std::vector<Vec3f>().swap(e.velocities);
                 std::vector<float>().swap(e.masses);
                 std::vector<float>().swap(e.volumes);
+                e.local.reset();
                 e.released = true;
             }
         }

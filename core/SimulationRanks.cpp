@@ -484,6 +484,7 @@ std::vector<AnySpecies> Simulation::gatherSpecies() const {
                 S whole;
                 whole.name = sp.name;
                 whole.params = sp.params;
+                whole.perParticle = sp.perParticle;
                 if (comm_->rank() == 0) {
                     S late = whole;
                     for (const Bytes& rankBytes : all) {

@@ -44,30 +44,60 @@ private:
     }
 };
 
-/// One material model with one parameter set and its particles.
+/// One material model with one parameter set and its particles, or with parameters particle by particle.
 template <class M>
 struct Species {
     using Material = M;
+    using Params = typename M::Params;
     std::string name;
-    typename M::Params params;
+    /// The set's parameters; with parameters per particle, the stiffest particle's (the CFL bound reads them).
+    Params params;
     ParticleArrays p;
     typename M::State state;
     /// Particles of grid leaf l are [leafStart[l], leafStart[l+1]) after binning (a step cache: binning
     /// rebuilds it before every use).
     std::vector<uint32_t> leafStart;
+    /// Whether each particle has parameters of its own in `local` (a set's material_fields): then `local` is one
+    /// more per-particle array, moved, sent and checkpointed with the others; a species without pays nothing.
+    bool perParticle = false;
+    std::vector<Params> local;
+
+    const Params& paramsOf(std::size_t i) const { return perParticle ? local[i] : params; }
 
     template <class F>
     void forEachArray(F&& f) {
         p.forEachArray(f);
         state.forEachArray(f);
+        if (perParticle) f(local);
     }
     template <class F>
     void forEachArray(F&& f) const {
         p.forEachArray(f);
         state.forEachArray(f);
+        if (perParticle) f(local);
     }
     std::size_t size() const { return p.size(); }
 };
+
+/// tau of particles first .. first + n - 1 (n <= simd::kLanes) of a species. Particles with parameters of their
+/// own go one at a time through the same batched code, so that a field equal everywhere gives the same bits. One
+/// call site for both: a second one changes how GCC inlines the models' batches, and with that where it contracts
+/// multiply-adds, which moved the bits of species without fields.
+template <class M>
+void kirchhoffOfRange(const Species<M>& sp, std::size_t first, int n, Mat3f* tau) {
+    const int batch = sp.perParticle ? 1 : n;
+    for (int k = 0; k < n; k += batch)
+        kirchhoffOfRange<M>(sp.paramsOf(first + std::size_t(k)), sp.state, first + std::size_t(k), batch, tau + k);
+}
+
+/// The deformation update and return map of particles first .. first + n - 1 (n <= simd::kLanes) of a species,
+/// the same way.
+template <class M>
+void updateDeformationOfRange(Species<M>& sp, std::size_t first, int n, const Mat3f* gradV, float dt) {
+    const int batch = sp.perParticle ? 1 : n;
+    for (int k = 0; k < n; k += batch)
+        updateDeformationOfRange<M>(sp.paramsOf(first + std::size_t(k)), sp.state, first + std::size_t(k), batch, gradV + k, dt);
+}
 
 /// The closed set of species types, one per material in materials/Materials.h, and of their parameters.
 template <class List>
@@ -76,10 +106,13 @@ template <class... Ms>
 struct SpeciesVariantOf<MaterialList<Ms...>> {
     using type = std::variant<Species<Ms>...>;
     using params = std::variant<typename Ms::Params...>;
+    using paramsArray = std::variant<std::vector<typename Ms::Params>...>;
 };
 using AnySpecies = SpeciesVariantOf<AllMaterials>::type;
 /// Parameters of any one material; the alternative says which.
 using AnyMaterialParams = SpeciesVariantOf<AllMaterials>::params;
+/// Parameters particle by particle, of any one material.
+using AnyParamsArray = SpeciesVariantOf<AllMaterials>::paramsArray;
 
 /// Common attributes of any species, without knowing its material.
 inline ParticleArrays& particlesOf(AnySpecies& s) {
@@ -95,7 +128,7 @@ inline AnySpecies makeSpecies(const std::string& name, const AnyMaterialParams& 
         [&]<class P>(const P& p) -> AnySpecies {
             AnySpecies out;
             forEachMaterial(AllMaterials{}, [&]<class M>() {
-                if constexpr (std::is_same_v<typename M::Params, P>) out = Species<M>{name, p, {}, {}, {}};
+                if constexpr (std::is_same_v<typename M::Params, P>) out = Species<M>{name, p, {}, {}, {}, false, {}};
             });
             return out;
         },

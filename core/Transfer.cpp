@@ -120,7 +120,7 @@ void scatterSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, d
     for (uint32_t p = begin; p < end; ++p) {
         // Stresses a batch at a time: the SVD-based models evaluate theirs in SIMD lanes.
         const uint32_t lane = (p - begin) % simd::kLanes;
-        if (lane == 0) kirchhoffOfRange<M>(sp.params, sp.state, p, int(std::min<uint32_t>(simd::kLanes, end - p)), stress);
+        if (lane == 0) kirchhoffOfRange<M>(sp, p, int(std::min<uint32_t>(simd::kLanes, end - p)), stress);
         const Mat3f& tau = stress[lane];
         const Stencil<K> st(P.x[p], invDx, fdx, origin);
         const float m = P.mass[p];
@@ -406,7 +406,7 @@ void gatherSpecies(Sp& sp, uint32_t begin, uint32_t end, const Vec3i& origin, do
         gradVs[lane] = gradV;
         if (lane + 1 < simd::kLanes && p + 1 < end) continue;
         const uint32_t first = p - lane;
-        updateDeformationOfRange<M>(sp.params, sp.state, first, int(lane + 1), gradVs, dt);
+        updateDeformationOfRange<M>(sp, first, int(lane + 1), gradVs, dt);
         for (uint32_t q = first; q <= p; ++q) {
             const float key = M::stiffnessKey(sp.state, q);
             const Vec3f& vq = P.v[q];

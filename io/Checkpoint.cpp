@@ -114,8 +114,10 @@ private:
     static std::size_t elementSize() {
         if constexpr (std::is_arithmetic_v<T>)
             return sizeof(T);
-        else
+        else if constexpr (requires { typename T::Scalar; })
             return sizeof(typename T::Scalar);
+        else
+            return alignof(T);  // a material's parameters, particle by particle: floats
     }
     std::ostream& os_;
     Checksum sum_;
@@ -369,7 +371,10 @@ Checkpoint decodeCheckpoint(std::vector<char> bytes, const std::string& path) {
                 in.bytes(&sps.params, sizeof(P));
                 uint32_t arrays = 0;
                 sps.forEachArray([&](const auto&) { ++arrays; });
-                if (in.value<uint32_t>() != arrays) in.fail("species " + name + " has another number of arrays");
+                // One array more than the model keeps: the particles' own parameters (Species::local).
+                const uint32_t stored = in.value<uint32_t>();
+                sps.perParticle = stored == arrays + 1;
+                if (stored != arrays && !sps.perParticle) in.fail("species " + name + " has another number of arrays");
                 sps.forEachArray([&](auto& a) { in.array(a); });
                 bool same = true;
                 sps.forEachArray([&](const auto& a) { same = same && a.size() == sps.size(); });

@@ -332,6 +332,19 @@ std::shared_ptr<const VectorField> vdbVectorField(const std::string& path, const
     return std::make_shared<const VectorField>(holder);
 }
 
+std::vector<double> vdbScalarSamples(const std::string& path, const std::string& gridName, const std::vector<Vec3d>& points) {
+    const openvdb::GridBase::Ptr base = readVdbGrid(path, gridName);
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+    if (!grid)
+        throw LevelSetError(path + ": grid \"" + gridName + "\" holds " + base->valueType() +
+                            " values; a scalar field holds floats");
+    const openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sample(*grid);
+    std::vector<double> out(points.size());
+    for (std::size_t p = 0; p < points.size(); ++p)
+        out[p] = double(sample.wsSample(openvdb::Vec3d(points[p][0], points[p][1], points[p][2])));
+    return out;
+}
+
 namespace {
 /// The pattern split around its $F or $Fn, and n (0: no padding).
 struct Pattern {

@@ -72,6 +72,10 @@ TriangleMesh placed(TriangleMesh mesh, const Placement& placement);
 /// The vector grid `grid` of a VDB file (a velocity field).
 std::shared_ptr<const VectorField> vdbVectorField(const std::string& path, const std::string& grid);
 
+/// The float grid `grid` of a VDB file sampled trilinearly at world points (a level set or a fog volume; where
+/// the grid has no active value, its background).
+std::vector<double> vdbScalarSamples(const std::string& path, const std::string& grid, const std::vector<Vec3d>& points);
+
 /// The frames of a sequence pattern ("wall_$F4.vdb"): the file of frame f, and the frames that exist.
 std::string sequenceFile(const std::string& pattern, int frame);
 std::vector<int> sequenceFrames(const std::string& pattern);

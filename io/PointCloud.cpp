@@ -36,7 +36,7 @@ void appendMaterialAttributes(const Sp& sp, const PointAttributes& a, PointCloud
         const float J = M::volumeRatio(sp.state, i);
         f.pscale.push_back(0.5f * std::cbrt(sp.p.volume0[i] * J));
         if (a.J) f.J.push_back(J);
-        if (a.stressNorm) f.stressNorm.push_back(M::kirchhoff(sp.params, sp.state, i).norm() / J);
+        if (a.stressNorm) f.stressNorm.push_back(M::kirchhoff(sp.paramsOf(i), sp.state, i).norm() / J);
         if (a.F) {
             if constexpr (requires { M::deformationGradient(sp.state, i); })
                 f.F.push_back(M::deformationGradient(sp.state, i));

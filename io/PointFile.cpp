@@ -107,7 +107,7 @@ Channels channelsOf(const Element& e) {
 
 }  // namespace
 
-PointCloudData readPlyPoints(const std::string& path) {
+PointCloudData readPlyPoints(const std::string& path, const std::vector<std::string>& columns) {
     if (!std::filesystem::is_regular_file(path)) throw PointFileError(path + ": no such point file");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw PointFileError(path + ": cannot open the file");
@@ -174,10 +174,22 @@ PointCloudData readPlyPoints(const std::string& path) {
                              ")");
     }
     if (vertex->count == 0) throw PointFileError(path + ": the file holds no points");
+    std::vector<std::size_t> asked;
+    for (const std::string& name : columns) {
+        const auto at = std::find_if(vertex->properties.begin(), vertex->properties.end(),
+                                     [&](const Property& p) { return p.name == name && !p.list; });
+        if (at == vertex->properties.end()) {
+            std::string names;
+            for (const Property& p : vertex->properties) names += (names.empty() ? "" : ", ") + p.name;
+            throw PointFileError(path + ": the vertices have no property \"" + name + "\" (they have: " + names + ")");
+        }
+        asked.push_back(std::size_t(at - vertex->properties.begin()));
+    }
     const bool velocity = ch.vx >= 0 && ch.vy >= 0 && ch.vz >= 0;
     const bool swap = format == Format::BigEndian;  // this machine is little-endian (x86-64)
 
     PointCloudData out;
+    out.columns.resize(asked.size());
     std::vector<double> values;
     auto take = [&](const Element& e, const std::vector<double>& vals) {
         if (&e != &*vertex) return;
@@ -187,6 +199,7 @@ PointCloudData readPlyPoints(const std::string& path) {
         if (ch.pscale >= 0) out.pscale.push_back(float(vals[std::size_t(ch.pscale)]));
         if (ch.mass >= 0) out.mass.push_back(float(vals[std::size_t(ch.mass)]));
         if (ch.density >= 0) out.density.push_back(float(vals[std::size_t(ch.density)]));
+        for (std::size_t c = 0; c < asked.size(); ++c) out.columns[c].push_back(float(vals[asked[c]]));
     };
     auto truncated = [&](const Element& e, long long i) {
         return PointFileError(path + ": the body ends in element \"" + e.name + "\" " + std::to_string(i) + " of " +

@@ -23,10 +23,13 @@ struct PointCloudData {
     std::vector<float> pscale;   ///< empty when the file has no radii
     std::vector<float> mass;     ///< [kg]; empty when the file has no masses
     std::vector<float> density;  ///< [kg/m^3]; empty when the file has no densities
+    /// The vertex properties asked for by name, in the order asked, one value per point.
+    std::vector<std::vector<float>> columns;
 };
 
-/// Reads the `vertex` element of a PLY file. Errors: no such file, not a PLY, no x, y, z (naming the
-/// properties it has), a truncated body, no points.
-PointCloudData readPlyPoints(const std::string& path);
+/// Reads the `vertex` element of a PLY file, and the vertex properties named in `columns`. Errors: no such file,
+/// not a PLY, no x, y, z or no property of a name asked for (naming the properties it has), a truncated body, no
+/// points.
+PointCloudData readPlyPoints(const std::string& path, const std::vector<std::string>& columns = {});
 
 }  // namespace mpm

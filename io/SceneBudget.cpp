@@ -181,7 +181,8 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         s.emissions = d.continuous ? 1 : emissionsWithin(d, scene.frames);  // a stream's volume is its whole flow
         double perParticle = 0.0, density = 0.0;
         visitMaterialParams(d.params, [&]<class M>(const typename M::Params& p) {
-            perParticle = particleBytes<M>();
+            // Parameters per particle are one more array (the CFL bound below takes the set's own, not the fields').
+            perParticle = particleBytes<M>() + (d.materialFields.empty() ? 0.0 : double(sizeof(typename M::Params)));
             density = p.density;
             typename M::Params scaled = p;
             M::scaleStiffness(scaled, d.lambdaScale, d.muScale);

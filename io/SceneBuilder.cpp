@@ -17,6 +17,7 @@
 #include "core/LevelSetSequence.h"
 #include "core/shapes/Polyhedron.h"
 #include "io/LevelSets.h"
+#include "io/MaterialFields.h"
 #include "io/MeshThickness.h"
 #include "io/PointFile.h"
 #include "io/Sampling.h"
@@ -25,13 +26,12 @@
 
 namespace mpm {
 
-namespace {
-
-/// A file named by a scene, relative to the scene file's folder unless absolute.
 std::string besideScene(const SceneDesc& scene, const std::string& file) {
     const std::filesystem::path p(file);
     return p.is_absolute() ? file : (std::filesystem::path(scene.file).parent_path() / p).string();
 }
+
+namespace {
 
 /// How deep inside a collider's surface its level set must reach [m]: nodes get mass from particles up to the
 /// stencil's half width away, and particles may be a substep's travel inside before the particle pass moves them
@@ -435,8 +435,11 @@ SetSamples pointCloudSet(const SetEntry& set, const PointsShape& shape) {
     const ParticleSetDesc& d = set.desc();
     const std::string where = set.path("shape/file");
     PointCloudData cloud;
+    std::vector<std::string> columns;
+    for (const MaterialFieldDesc& f : d.materialFields)
+        if (f.source == MaterialFieldDesc::Source::Attribute) columns.push_back(f.attribute);
     try {
-        cloud = readPlyPoints(besideScene(scene, shape.file));
+        cloud = readPlyPoints(besideScene(scene, shape.file), columns);
     } catch (const PointFileError& e) {
         throw SceneError(scene.file + ": " + where + ": " + e.what());
     }
@@ -446,6 +449,7 @@ SetSamples pointCloudSet(const SetEntry& set, const PointsShape& shape) {
     const Placement& t = shape.transform;
     SetSamples out;
     out.positions = std::move(cloud.x);
+    out.columns = std::move(cloud.columns);
     for (Vec3d& x : out.positions) x = t.apply(x);
     const Mat3f turn = t.rotate.matrix().cast<float>();
     for (const Vec3f& v : cloud.v) out.velocities.push_back(turn * v);
@@ -493,6 +497,7 @@ static SetSamples sampleSetShape(const SetEntry& set, const SamplePart& part) {
                 arr = std::decay_t<decltype(arr)>(arr.begin() + std::ptrdiff_t(begin), arr.begin() + std::ptrdiff_t(end));
         };
         cut(all.positions), cut(all.velocities), cut(all.volumes), cut(all.masses);
+        for (std::vector<float>& column : all.columns) cut(column);
         return all;
     }
     if (d.continuous || isOutlet(d.shape)) throw std::logic_error("sampleSetShape: a continuous source is a stream (streamOf)");
@@ -897,13 +902,18 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         liquidWarnings(set, found.warnings);
         AnyMaterialParams params = d.params;
         visitMaterialParams(params, [&]<class M>(typename M::Params& p) { M::scaleStiffness(p, d.lambdaScale, d.muScale); });
-        const int species = sim->addSpecies(makeSpecies(d.name, params), bodyOf[i]);
-        if (species != layout.speciesOfSet[i])
-            throw std::logic_error("buildSimulation: species order differs from speciesLayout");
+        auto addSpecies = [&, i](AnySpecies species) {
+            if (sim->addSpecies(std::move(species), bodyOf[i]) != layout.speciesOfSet[i])
+                throw std::logic_error("buildSimulation: species order differs from speciesLayout");
+        };
         Emitter e;
-        e.species = species;
+        e.species = layout.speciesOfSet[i];
         e.set = uint16_t(i);
         if (d.continuous || isOutlet(d.shape)) {
+            if (!d.materialFields.empty())
+                throw SceneError(set.at("material_fields") +
+                                 ": a stream enters as uniform material; parameters per particle need a sampled shape");
+            addSpecies(makeSpecies(d.name, params));
             // A stream: each particle is one spacing cube of the material.
             e.continuous = true;
             e.stream = streamOf(set);
@@ -921,6 +931,22 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         asked.checkStop();
         watch.note("sampling set " + std::to_string(i) + " '" + d.name + "'");
         SetSamples samples = sampleSet(set, comm, watch.stop);
+        AnySpecies species = makeSpecies(d.name, params);
+        std::vector<float> densities;
+        if (!d.materialFields.empty()) {
+            watch.note("material fields of set " + std::to_string(i) + " '" + d.name + "'");
+            FieldParams fields = fieldParams(set, samples, comm);
+            std::visit(
+                [&](auto& sp) {
+                    using Params = typename std::decay_t<decltype(sp)>::Params;
+                    sp.params = std::get<Params>(fields.stiffest);
+                    sp.perParticle = true;
+                },
+                species);
+            e.local = std::move(fields.local);
+            densities = std::move(fields.densities);
+        }
+        addSpecies(std::move(species));
         found.setPivot[i] = samples.pivot;
         e.positions = std::move(samples.positions);
         long long total = (long long)e.positions.size();
@@ -947,10 +973,16 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         e.mass = float(e.volume * density * d.massScale);
         e.volumes = std::move(samples.volumes);
         e.masses = std::move(samples.masses);
-        if (e.masses.empty() && !e.volumes.empty())
+        if (!densities.empty()) {
+            // A density field: each particle's mass from its own density.
+            for (std::size_t p = 0; p < densities.size(); ++p)
+                e.masses.push_back(
+                    float((e.volumes.empty() ? double(e.volume) : double(e.volumes[p])) * densities[p] * d.massScale));
+        } else if (e.masses.empty() && !e.volumes.empty()) {
             for (float v : e.volumes) e.masses.push_back(float(v * density * d.massScale));
-        else
+        } else {
             for (float& m : e.masses) m = float(m * d.massScale);
+        }
         e.startFrame = d.startFrame;
         e.durationFrames = d.durationFrames;
         e.pauseFrames = d.pauseFrames;

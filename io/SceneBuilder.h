@@ -25,6 +25,9 @@ struct SpeciesLayout {
 
 SpeciesLayout speciesLayout(const SceneDesc& scene);
 
+/// A file named by a scene, relative to the scene file's folder unless absolute.
+std::string besideScene(const SceneDesc& scene, const std::string& file);
+
 /// Set `i`'s particles: positions in the scene (a file's shape is sampled in the file's own coordinates and
 /// then placed by its transform, so moving an asset moves its particles exactly) and the volume they fill.
 /// Reads the set's file, if it has one; errors name the scene, the key and the file.
@@ -35,6 +38,8 @@ struct SetSamples {
     std::vector<float> volumes;     ///< per particle, a point cloud's with radii; empty: volume shared evenly
     std::vector<float> masses;      ///< per particle, a point cloud's with masses or densities; empty: density x volume
     std::optional<Vec3d> pivot;     ///< a spinning set's centre of spin (its centroid unless the scene gives one)
+    /// A point cloud's vertex properties that the set's `attribute` material fields name, in their order.
+    std::vector<std::vector<float>> columns;
 };
 /// With several ranks each gets its part of the samples (in rank order, the whole set's order; `volume`
 /// stays the whole set's): a Poisson-disk set given by its density samples only its part's tiles.

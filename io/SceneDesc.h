@@ -3,6 +3,7 @@
 // reader (io/SceneReader.h) makes one from JSON; the builder (io/SceneBuilder.h) makes a Simulation from it.
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/Settings.h"
@@ -19,11 +20,27 @@ public:
 
 enum class Sampling { Poisson, Grid, Lattice };
 
+/// One material parameter given particle by particle: a linear ramp, a VDB scalar grid sampled where each
+/// particle is seeded, or a column of a point cloud's PLY file.
+struct MaterialFieldDesc {
+    enum class Source { Ramp, Vdb, Attribute };
+    std::string param;  ///< a number key of the set's material_params ("youngs_modulus")
+    Source source = Source::Ramp;
+    Vec3d from = Vec3d::Zero(), to = Vec3d::UnitX();  ///< ramp: the value goes from fromValue at `from` to toValue at `to`
+    double fromValue = 0.0, toValue = 0.0;
+    std::string file, grid;  ///< vdb: the file (beside the scene) and its float grid (default: param)
+    std::string attribute;   ///< attribute: the PLY vertex property (default: param)
+};
+
 struct ParticleSetDesc {
     std::string name;
     std::string material = "water";  ///< scene name of the material (materials/Materials.h)
     std::string body;                ///< multi_field contact: sets sharing a body name share a velocity field (empty: its own)
     AnyMaterialParams params;        ///< its parameters, overrides applied; the Lame scales below come on top
+    /// The material_params numbers as read, defaults included (youngs_modulus with poisson_ratio: the particle
+    /// parameters of a field are made from them, as `params` was, with the field's value in place of one).
+    std::vector<std::pair<std::string, double>> materialNumbers;
+    std::vector<MaterialFieldDesc> materialFields;  ///< parameters given per particle
     SetShape shape;
     Vec3f velocity = Vec3f::Zero();
     Vec3f colour = Vec3f::Ones();           ///< Cd of its points (linear RGB); the material's unless given

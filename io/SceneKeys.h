@@ -2,6 +2,7 @@
 // The scene keys of the simulation settings, the output, a particle set and a collider, in the form of
 // base/Parameters.h: the reader and `mpm validate --explain` walk these same functions. The keys of a
 // material are in its header (materials/), those of a shape in its file (core/shapes/).
+#include <algorithm>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -23,6 +24,69 @@ inline constexpr Named<Boundary> kBoundaries[] = {
     {Boundary::Sticky, "sticky"}, {Boundary::Slip, "slip"}, {Boundary::Separate, "separate"}};
 inline constexpr Named<Sampling> kSamplings[] = {
     {Sampling::Poisson, "poisson"}, {Sampling::Grid, "grid"}, {Sampling::Lattice, "lattice"}};
+
+inline constexpr Named<MaterialFieldDesc::Source> kFieldSources[] = {{MaterialFieldDesc::Source::Ramp, "ramp"},
+                                                                     {MaterialFieldDesc::Source::Vdb, "vdb"},
+                                                                     {MaterialFieldDesc::Source::Attribute, "attribute"}};
+
+/// A key visitor that lists the names of the number keys it is shown.
+struct NumberKeyNames : KeyVisitorArchetype {
+    std::vector<std::string> names;
+    template <class T>
+    void number(const Key& k, T&) {
+        names.emplace_back(k.name);
+    }
+};
+
+/// The number keys of a material's material_params (those a material field may give per particle).
+inline std::vector<std::string> materialNumberKeys(const std::string& material) {
+    NumberKeyNames v;
+    AnyMaterialParams p;
+    if (defaultMaterialParams(material, p))
+        visitMaterialParams(p, [&]<class M>(typename M::Params& params) { M::keys(v, params); });
+    return v.names;
+}
+
+/// A material parameter given per particle (io/MaterialFields.h samples it).
+template <class V>
+void materialFieldKeys(V& v, MaterialFieldDesc& f, const std::string& material) {
+    v.text(Key{.name = "param",
+               .help = "the material parameter it gives, a number key of the set's material_params (youngs_modulus, density, "
+                       "viscosity, yield_stress, ...)",
+               .required = true},
+           f.param);
+    const std::vector<std::string> numbers = materialNumberKeys(material);
+    std::string known;
+    for (const std::string& n : numbers) known += (known.empty() ? "" : ", ") + n;
+    v.check(std::find(numbers.begin(), numbers.end(), f.param) != numbers.end(), "param",
+            "\"" + f.param + "\" is not a number of material " + material + "; its numbers: " + known);
+    v.choice(Key{.name = "source",
+                 .help = "ramp: linear from `from` to `to`, held beyond them; vdb: a float grid sampled (trilinearly) where each "
+                         "particle is seeded; attribute: a vertex property of a points set's PLY file",
+                 .required = true,
+                 .noun = "field source"},
+             f.source, std::span<const Named<MaterialFieldDesc::Source>>(kFieldSources));
+    using Source = MaterialFieldDesc::Source;
+    // A scene reads the keys of its source; the documentation (given() false) lists them all.
+    if (f.source == Source::Ramp || !v.given("source")) {
+        v.vec3(Key{.name = "from", .help = "ramp: where it takes from_value", .unit = "m"}, f.from);
+        v.vec3(Key{.name = "to", .help = "ramp: where it takes to_value", .unit = "m"}, f.to);
+        v.number(Key{.name = "from_value", .help = "ramp: the value at `from` (in the parameter's unit)"}, f.fromValue);
+        v.number(Key{.name = "to_value", .help = "ramp: the value at `to`"}, f.toValue);
+        v.check(f.source != Source::Ramp || (f.to - f.from).norm() > 0.0, "to", "must differ from `from`");
+    }
+    if (f.source == Source::Vdb || !v.given("source")) {
+        v.text(Key{.name = "file", .help = "vdb: the VDB file, relative to the scene file"}, f.file);
+        if (!v.given("grid")) f.grid = f.param;
+        v.text(Key{.name = "grid", .help = "vdb: its float grid", .byDefault = "the param's name"}, f.grid);
+        v.check(f.source != Source::Vdb || !f.file.empty(), "file", "a vdb field needs a file");
+    }
+    if (f.source == Source::Attribute || !v.given("source")) {
+        if (!v.given("attribute")) f.attribute = f.param;
+        v.text(Key{.name = "attribute", .help = "attribute: the PLY vertex property", .byDefault = "the param's name"},
+               f.attribute);
+    }
+}
 
 /// The colour a set's points take unless the set gives one: its material's kColour (linear RGB; tools/render_blender.py
 /// draws with it).
@@ -270,6 +334,16 @@ void setKeys(V& v, ParticleSetDesc& d) {
              d.muScale);
     v.number(Key{.name = "mass_scale", .help = "scales particle mass", .lo = 1e-6, .hi = 1e6}, d.massScale);
     v.integer(Key{.name = "seed", .help = "sampling seed", .lo = 0, .hi = 4294967295.0, .byDefault = "set index + 1"}, d.seed);
+    v.list(Key{.name = "material_fields",
+               .help = "material parameters given per particle, each in place of its material_params value: a stiffness "
+                       "or density that varies through the body. Each particle's value must lie in the parameter's range"},
+           d.materialFields, [&](auto& f, MaterialFieldDesc& field) { materialFieldKeys(f, field, d.material); });
+    for (std::size_t k = 0; k < d.materialFields.size(); ++k)
+        for (std::size_t j = 0; j < k; ++j)
+            v.check(d.materialFields[j].param != d.materialFields[k].param, "material_fields",
+                    "two fields give " + d.materialFields[k].param);
+    v.check(!d.continuous || d.materialFields.empty(), "material_fields",
+            "a stream enters as uniform material; parameters per particle need a sampled shape");
 }
 
 /// A collider's motion: constant velocity and spin, or keyframed poses (core/Motion.h).

@@ -70,6 +70,8 @@ public:
     }
     const std::string& path() const { return path_; }
     bool has(std::string_view key) const { return in_.contains(key); }
+    /// What it has read so far, defaults filled in.
+    const json& resolved() const { return out_; }
 
     // The key visitor (base/Parameters.h).
     template <class T>
@@ -262,6 +264,8 @@ void readSet(JsonKeys& n, std::size_t index, SceneDesc& scene) {
     defaultMaterialParams(d.material, d.params);
     visitMaterialParams(d.params, [&]<class M>(typename M::Params& p) { M::keys(params, p); });
     params.finish();
+    for (auto it = params.resolved().begin(); it != params.resolved().end(); ++it)
+        if (it.value().is_number()) d.materialNumbers.emplace_back(it.key(), it.value().get<double>());
     n.finish();
     scene.sets.push_back(std::move(d));
 }

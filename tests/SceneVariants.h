@@ -107,6 +107,8 @@ inline nlohmann::json transformScene(nlohmann::json scene, const RigidMap& m) {
         mapVector(set, "velocity", m);
         mapVector(set, "angular_velocity", m);
         mapPoint(set, "pivot", m);
+        if (set.contains("material_fields"))
+            for (nlohmann::json& f : set["material_fields"]) mapPoint(f, "from", m), mapPoint(f, "to", m);
     }
     if (!scene.contains("colliders")) return scene;
     for (nlohmann::json& c : scene["colliders"]) {

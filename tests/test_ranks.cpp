@@ -266,6 +266,26 @@ TEST(Ranks, BodiesWithFieldsOfTheirOwnGiveTheBitsOfOneProcess) {
     expectSameBitsOnRanks(scene, "bodies", dir, {{2, "2"}, {3, "1"}});
 }
 
+TEST(Ranks, ParametersPerParticleTravelWithTheirParticlesAndResumeFromACheckpoint) {
+    REQUIRE_MPI();
+    const std::string dir = tempDir("ranks_fields");
+    // A jelly block whose stiffness and density ramp, thrown across the ranks' ranges into a pool whose density
+    // ramps: each particle's parameters move with it from rank to rank.
+    const std::string scene = std::string(MPM_SOURCE_DIR) + "/tests/scenes/fields.json";
+    expectSameBitsOnRanks(scene, "fields", dir, {{2, "2"}, {3, "1"}});
+    // Frames 1-2 on two ranks (the scene checkpoints at frame 2), the rest on one process: the bits of the whole run.
+    const std::string out = dir + "/split";
+    const Result first = runRanks(2, {"run", scene, "-o", out, "--frames", "0:2", "--quiet", "--threads", "1"}, dir);
+    ASSERT_EQ(first.code, 0) << first.output;
+    const Result second = runMpm({"run", scene, "-o", out, "--resume", "--threads", "1"}, dir);
+    ASSERT_EQ(second.code, 0) << second.output;
+    EXPECT_NE(second.output.find("continuing from"), std::string::npos) << second.output;
+    for (const char* frame : {"0003", "0004"})
+        EXPECT_EQ(mpm::test::vdbWithoutUuid(dir + "/one/fields_points_" + frame + ".vdb"),
+                  mpm::test::vdbWithoutUuid(out + "/fields_points_" + frame + ".vdb"))
+            << frame;
+}
+
 TEST(Ranks, RigidBodiesInMaterialSpreadOverTheRanksGiveTheBitsOfOneProcess) {
     REQUIRE_MPI();
     const std::string dir = tempDir("ranks_rigid");

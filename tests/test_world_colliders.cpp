@@ -432,3 +432,37 @@ TEST(VdbCollider, ARisingSequenceOfLevelSetsLiftsTheBodyOnIt) {
     for (int f = 12; f < 36; ++f) sim->advanceFrame();
     EXPECT_NEAR(meanPosition(*sim)[1] - y0, 0.24, 0.02);
 }
+
+TEST(Shapes, ATubeIsTheWallBetweenItsTwoRadii) {
+    // A tube of radii 0.1 and 0.08, 0.3 long, about an oblique axis. Its signed distance at points whose distance
+    // is known by construction: on the axis (the bore: + the inner radius, 0.08), in the wall's middle (- half the
+    // wall, 0.01), past an end above the wall (+ the distance), in the bore beyond an end (the distance to the inner
+    // rim's circle); and filled as a lattice at 8 a cell (dx 0.005), its particles' count against the annulus's
+    // volume pi (R^2 - r^2) h / spacing^3 (band 2%: the lattice's cells cut by the two curved walls).
+    const Vec3d c(0.3, 0.2, -0.1), axis = Vec3d(1, 2, 2).normalized();
+    Cylinder t;
+    t.centre = c, t.axis = axis, t.radius = 0.1, t.inner = 0.08, t.height = 0.3;
+    const Vec3d across = axis.unitOrthogonal();
+    EXPECT_NEAR(t.signedDistance(c), 0.08, 1e-12);
+    EXPECT_NEAR(t.signedDistance(c + 0.09 * across), -0.01, 1e-12);
+    EXPECT_NEAR(t.signedDistance(c + 0.09 * across + 0.2 * axis), 0.05, 1e-12);
+    EXPECT_NEAR(t.signedDistance(c + 0.17 * axis), std::hypot(0.08, 0.02), 1e-12);
+    EXPECT_NEAR(t.normalAt(c + 0.081 * across).dot(across), -1.0, 1e-12);  // the bore's wall faces the axis
+    EXPECT_NEAR(t.normalAt(c + 0.099 * across).dot(across), 1.0, 1e-12);   // the outer wall faces out
+    const std::string text = R"({"simulation": {"dx": 0.005}, "sets": [{"material": "metal", "sampling": "lattice",
+        "shape": {"type": "cylinder", "center": [0.3, 0.2, -0.1], "axis": [1, 2, 2], "radius": 0.1, "inner_radius": 0.08,
+                  "height": 0.3}}]})";
+    const SceneDesc scene = parseScene(text, "tube.json");
+    const std::size_t n = sampleSet(SetEntry(scene, 0)).positions.size();
+    const double spacing = 0.005 / 2.0;
+    EXPECT_NEAR(double(n) * std::pow(spacing, 3) / (M_PI * (0.01 - 0.0064) * 0.3), 1.0, 0.02) << n;
+    const std::string bad = R"({"sets": [{"shape": {"type": "cylinder", "center": [0, 0, 0], "radius": 0.1, "inner_radius": 0.1,
+        "height": 1}}]})";
+    try {
+        parseScene(bad, "tube.json");
+        ADD_FAILURE() << "an inner radius equal to the radius was accepted";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("/sets/0/shape/inner_radius: must be smaller than radius"), std::string::npos)
+            << e.what();
+    }
+}
