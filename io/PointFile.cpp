@@ -181,7 +181,8 @@ PointCloudData readPlyPoints(const std::string& path, const std::vector<std::str
         if (at == vertex->properties.end()) {
             std::string names;
             for (const Property& p : vertex->properties) names += (names.empty() ? "" : ", ") + p.name;
-            throw PointFileError(path + ": the vertices have no property \"" + name + "\" (they have: " + names + ")");
+            throw PointFileMissingProperty(path + ": the vertices have no property \"" + name + "\" (they have: " + names + ")",
+                                           asked.size());
         }
         asked.push_back(std::size_t(at - vertex->properties.begin()));
     }

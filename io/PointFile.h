@@ -17,6 +17,13 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// A vertex property asked for by name that the file does not have: `column` is its place in the names asked for.
+class PointFileMissingProperty : public PointFileError {
+public:
+    PointFileMissingProperty(const std::string& what, std::size_t c) : PointFileError(what), column(c) {}
+    std::size_t column;
+};
+
 struct PointCloudData {
     std::vector<Vec3d> x;
     std::vector<Vec3f> v;        ///< empty when the file has no velocities

@@ -7,8 +7,11 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <numeric>
+#include <optional>
 #include <sstream>
 
+#include "io/MaterialFields.h"
 #include "io/Sampling.h"
 #include "io/SceneBuilder.h"
 
@@ -170,26 +173,39 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         setExtent(set, s.volume, lo, hi);
         const double largestCoordinate = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
         const double expected = d.count > 0 ? double(d.count) : s.volume / cell * d.particlesPerCell;
-        if (d.count > 0)
+        std::optional<SetSamples> samples;  // when counted exactly
+        std::optional<FieldParams> fields;  // its material fields at those samples
+        if (!d.continuous && countExactly && expected <= kSampleUpTo) {
+            samples = sampleSet(set);
+            if (!d.materialFields.empty()) fields = fieldParams(set, *samples, Comm::single());
+        }
+        if (samples)
+            s.particles = (long long)samples->positions.size();
+        else if (d.count > 0)
             s.particles = d.count;
-        else if (d.continuous)
-            s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
-        else if (countExactly && expected <= kSampleUpTo)
-            s.particles = (long long)sampleSet(set).positions.size();
         else
             s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
         s.emissions = d.continuous ? 1 : emissionsWithin(d, scene.frames);  // a stream's volume is its whole flow
         double perParticle = 0.0, density = 0.0;
         visitMaterialParams(d.params, [&]<class M>(const typename M::Params& p) {
-            // Parameters per particle are one more array (the CFL bound below takes the set's own, not the fields').
+            // Parameters per particle are one more array; the CFL bound takes the stiffest particle's where the set
+            // was sampled, else the set's own.
             perParticle = particleBytes<M>() + (d.materialFields.empty() ? 0.0 : double(sizeof(typename M::Params)));
             density = p.density;
             typename M::Params scaled = p;
             M::scaleStiffness(scaled, d.lambdaScale, d.muScale);
+            if (fields) scaled = std::get<typename M::Params>(fields->stiffest);
             const float w = restWaveSpeed<M>(scaled);
             if (!(w <= c)) c = w, stiffest = d.name;  // a NaN wave speed wins, and is reported below
         });
         s.mass = s.volume * density * d.massScale;
+        if (samples && !samples->positions.empty()) {
+            // Its particles' own masses where they have them (a point cloud's, a density field's).
+            const float volume = float(samples->volume / double(samples->positions.size()));
+            const std::vector<float> masses =
+                particleMasses(d, float(density), volume, *samples, fields ? fields->densities : std::vector<float>{});
+            if (!masses.empty()) s.mass = std::accumulate(masses.begin(), masses.end(), 0.0);
+        }
         vmax = std::max(vmax, d.velocity.norm());
         const double total = double(s.particles) * double(s.emissions);
         b.peakParticles += total;

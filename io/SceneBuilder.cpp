@@ -436,10 +436,15 @@ SetSamples pointCloudSet(const SetEntry& set, const PointsShape& shape) {
     const std::string where = set.path("shape/file");
     PointCloudData cloud;
     std::vector<std::string> columns;
-    for (const MaterialFieldDesc& f : d.materialFields)
-        if (f.source == MaterialFieldDesc::Source::Attribute) columns.push_back(f.attribute);
+    std::vector<std::size_t> fieldOfColumn;
+    for (std::size_t f = 0; f < d.materialFields.size(); ++f)
+        if (d.materialFields[f].source == MaterialFieldDesc::Source::Attribute)
+            columns.push_back(d.materialFields[f].attribute), fieldOfColumn.push_back(f);
     try {
         cloud = readPlyPoints(besideScene(scene, shape.file), columns);
+    } catch (const PointFileMissingProperty& e) {
+        throw SceneError(set.at("material_fields/" + std::to_string(fieldOfColumn.at(e.column)) + "/attribute") + ": " +
+                         e.what());
     } catch (const PointFileError& e) {
         throw SceneError(scene.file + ": " + where + ": " + e.what());
     }
@@ -837,19 +842,41 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
             ParticleSetDesc& c = coarse.sets[i];
             c.particlesPerCell *= kCoarseSample / expected;
             if (c.count > 0) c.count = (long long)kCoarseSample;
-            const std::vector<Vec3d> few = sampleSet(SetEntry(coarse, i)).positions;
+            const SetSamples coarseSamples = sampleSet(SetEntry(coarse, i));
+            // Its material fields, on the coarse samples: their files, grids and values at those points.
+            if (!set.desc().materialFields.empty()) fieldParams(SetEntry(coarse, i), coarseSamples, Comm::single());
+            const std::vector<Vec3d>& few = coarseSamples.positions;
             if (few.empty()) continue;
             std::vector<long long> inside = countInside(set, few, colliders);
             for (long long& k : inside) k = std::llround(double(k) * expected / double(few.size()));
             setWarnings(set, (long long)expected, inside, out, true);
             continue;
         }
-        positions[i] = sampleSet(set).positions;
+        const SetSamples samples = sampleSet(set);
+        // Its material fields: their files, grids and every particle's values.
+        if (!set.desc().materialFields.empty()) fieldParams(set, samples, Comm::single());
+        positions[i] = samples.positions;
         if (positions[i].empty()) noParticleFits(set);
         setWarnings(set, (long long)positions[i].size(), countInside(set, positions[i], colliders), out);
     }
     overlapWarnings(scene, positions, out);
     return out;
+}
+
+std::vector<float> particleMasses(const ParticleSetDesc& d, float density, float volume, const SetSamples& samples,
+                                  const std::vector<float>& densities) {
+    std::vector<float> masses;
+    if (!densities.empty()) {
+        // A density field: each particle's mass from its own density.
+        for (std::size_t p = 0; p < densities.size(); ++p)
+            masses.push_back(
+                float((samples.volumes.empty() ? double(volume) : double(samples.volumes[p])) * densities[p] * d.massScale));
+    } else if (samples.masses.empty()) {
+        for (float v : samples.volumes) masses.push_back(float(v * density * d.massScale));
+    } else {
+        for (float m : samples.masses) masses.push_back(float(m * d.massScale));
+    }
+    return masses;
 }
 
 SpeciesLayout speciesLayout(const SceneDesc& scene) {
@@ -971,18 +998,8 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         e.volume = float(samples.volume / double(total));
         const float density = std::visit([](const auto& p) { return p.density; }, params);
         e.mass = float(e.volume * density * d.massScale);
+        e.masses = particleMasses(d, density, e.volume, samples, densities);
         e.volumes = std::move(samples.volumes);
-        e.masses = std::move(samples.masses);
-        if (!densities.empty()) {
-            // A density field: each particle's mass from its own density.
-            for (std::size_t p = 0; p < densities.size(); ++p)
-                e.masses.push_back(
-                    float((e.volumes.empty() ? double(e.volume) : double(e.volumes[p])) * densities[p] * d.massScale));
-        } else if (e.masses.empty() && !e.volumes.empty()) {
-            for (float v : e.volumes) e.masses.push_back(float(v * density * d.massScale));
-        } else {
-            for (float& m : e.masses) m = float(m * d.massScale);
-        }
         e.startFrame = d.startFrame;
         e.durationFrames = d.durationFrames;
         e.pauseFrames = d.pauseFrames;

@@ -41,6 +41,11 @@ struct SetSamples {
     /// A point cloud's vertex properties that the set's `attribute` material fields name, in their order.
     std::vector<std::vector<float>> columns;
 };
+/// The masses of a set's samples particle by particle, by the set's rule: a point cloud's own (masses or densities),
+/// each particle's density from a density field (`densities`), or `density` times a point cloud's volumes; all times
+/// the set's mass_scale. Empty: every particle has `volume` times `density` times mass_scale.
+std::vector<float> particleMasses(const ParticleSetDesc& d, float density, float volume, const SetSamples& samples,
+                                  const std::vector<float>& densities = {});
 /// With several ranks each gets its part of the samples (in rank order, the whole set's order; `volume`
 /// stays the whole set's): a Poisson-disk set given by its density samples only its part's tiles.
 /// Collective on `comm`.

@@ -69,21 +69,33 @@ void materialFieldKeys(V& v, MaterialFieldDesc& f, const std::string& material) 
     using Source = MaterialFieldDesc::Source;
     // A scene reads the keys of its source; the documentation (given() false) lists them all.
     if (f.source == Source::Ramp || !v.given("source")) {
-        v.vec3(Key{.name = "from", .help = "ramp: where it takes from_value", .unit = "m"}, f.from);
+        v.vec3(Key{.name = "from",
+                   .help = "ramp: where it takes from_value (world coordinates, as the scene places the set); the value at "
+                           "a particle x is from_value + t (to_value - from_value), t = (x - from) . (to - from) / |to - "
+                           "from|^2 held to 0 .. 1",
+                   .unit = "m"},
+               f.from);
         v.vec3(Key{.name = "to", .help = "ramp: where it takes to_value", .unit = "m"}, f.to);
-        v.number(Key{.name = "from_value", .help = "ramp: the value at `from` (in the parameter's unit)"}, f.fromValue);
-        v.number(Key{.name = "to_value", .help = "ramp: the value at `to`"}, f.toValue);
+        v.number(Key{.name = "from_value", .help = "ramp: the value at `from`, in the parameter's unit", .required = true},
+                 f.fromValue);
+        v.number(Key{.name = "to_value", .help = "ramp: the value at `to`", .required = true}, f.toValue);
         v.check(f.source != Source::Ramp || (f.to - f.from).norm() > 0.0, "to", "must differ from `from`");
     }
     if (f.source == Source::Vdb || !v.given("source")) {
-        v.text(Key{.name = "file", .help = "vdb: the VDB file, relative to the scene file"}, f.file);
+        v.text(Key{.name = "file",
+                   .help = "vdb: the VDB file, relative to the scene file; its float grid is sampled trilinearly in world "
+                           "space at each particle's seed, and gives its background value outside its active voxels"},
+               f.file);
         if (!v.given("grid")) f.grid = f.param;
         v.text(Key{.name = "grid", .help = "vdb: its float grid", .byDefault = "the param's name"}, f.grid);
         v.check(f.source != Source::Vdb || !f.file.empty(), "file", "a vdb field needs a file");
     }
     if (f.source == Source::Attribute || !v.given("source")) {
         if (!v.given("attribute")) f.attribute = f.param;
-        v.text(Key{.name = "attribute", .help = "attribute: the PLY vertex property", .byDefault = "the param's name"},
+        v.text(Key{.name = "attribute",
+                   .help = "attribute: the vertex property of the set's PLY (a points set). A PLY with mass or density "
+                           "columns gives its points' masses by itself, and then takes no density field",
+                   .byDefault = "the param's name"},
                f.attribute);
     }
 }
@@ -336,7 +348,8 @@ void setKeys(V& v, ParticleSetDesc& d) {
     v.integer(Key{.name = "seed", .help = "sampling seed", .lo = 0, .hi = 4294967295.0, .byDefault = "set index + 1"}, d.seed);
     v.list(Key{.name = "material_fields",
                .help = "material parameters given per particle, each in place of its material_params value: a stiffness "
-                       "or density that varies through the body. Each particle's value must lie in the parameter's range"},
+                       "or density that varies through the body. Sampled once, where each particle is seeded (a resumed run "
+                       "keeps the values its checkpoint holds); each value must lie in the parameter's range"},
            d.materialFields, [&](auto& f, MaterialFieldDesc& field) { materialFieldKeys(f, field, d.material); });
     for (std::size_t k = 0; k < d.materialFields.size(); ++k)
         for (std::size_t j = 0; j < k; ++j)

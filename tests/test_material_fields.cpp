@@ -186,6 +186,15 @@ TEST(MaterialFields, EachParticleCarriesTheValueAtItsSeedAndItsMassFromItsDensit
     EXPECT_NEAR(mass / (1000.0 * 0.2 * 0.1 * 0.1), 1.0, 1e-5);
     // The CFL bound reads the stiffest particle's: sqrt(E / rho) grows along x, so one of those furthest along x.
     EXPECT_NEAR(youngOf(sp.params) / (1e5 + 4e5 * right / 0.2), 1.0, 1e-5);
+    // Their parameters travel with them as the particles are sorted into leaves substep by substep.
+    std::map<int32_t, double> seed;
+    for (std::size_t i = 0; i < sp.size(); ++i) seed[sp.p.id[i]] = sp.p.x[i][0];
+    sim->advanceFrame(), sim->advanceFrame();
+    for (std::size_t i = 0; i < sp.size(); ++i) {
+        const double t = seed.at(sp.p.id[i]) / 0.2;
+        ASSERT_NEAR(youngOf(sp.local[i]) / (1e5 + 4e5 * t), 1.0, 1e-5) << i;
+        ASSERT_NEAR(double(sp.p.mass[i]) / (double(sp.p.volume0[i]) * (500.0 + 1000.0 * t)), 1.0, 1e-5) << i;
+    }
 }
 
 TEST(MaterialFields, AVdbGridAndAPointCloudsPropertyGiveEachParticleItsValue) {
@@ -240,6 +249,45 @@ TEST(MaterialFields, BadFieldsAreNamedErrors) {
     EXPECT_NE(e.find("none.vdb"), std::string::npos) << e;
     e = sceneError(json::parse(R"([{"param": "density"}])"));
     EXPECT_NE(e.find("/sets/0/material_fields/0/source: missing required field"), std::string::npos) << e;
-    e = sceneError(json::parse(R"([{"param": "density", "source": "ramp", "file": "x.vdb"}])"));
+    e = sceneError(json::parse(R"([{"param": "density", "source": "ramp", "from_value": 1, "to_value": 2, "file": "x.vdb"}])"));
     EXPECT_NE(e.find("/sets/0/material_fields/0/file: unknown key"), std::string::npos) << e;
+    e = sceneError(json::parse(R"([{"param": "density", "source": "ramp", "from_value": 1000}])"));
+    EXPECT_NE(e.find("/sets/0/material_fields/0/to_value: missing required field"), std::string::npos) << e;
+    // A property the point cloud does not have: named at the field that asks for it.
+    std::ofstream(dir + "/cloud.ply") << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                         "property float z\nend_header\n0 0.1 0\n";
+    try {
+        buildSimulation(parseScene(R"({"sets": [{"material": "jelly", "shape": {"type": "points", "file": "cloud.ply"},
+            "material_fields": [{"param": "youngs_modulus", "source": "attribute", "attribute": "E"}]}]})",
+                                   dir + "/cloud.json"));
+        ADD_FAILURE() << "a missing property was accepted";
+    } catch (const SceneError& x) {
+        EXPECT_NE(std::string(x.what()).find("cloud.json: /sets/0/material_fields/0/attribute: "), std::string::npos) << x.what();
+        EXPECT_NE(std::string(x.what()).find("no property \"E\" (they have: x, y, z)"), std::string::npos) << x.what();
+    }
+}
+
+TEST(MaterialFields, ValidateChecksTheFieldsAndCountsTheirMass) {
+    const std::string dir = tempDir("material_fields_validate");
+    // mpm validate samples the fields as a run does: a missing grid and a value out of range are its errors (exit 2),
+    // and a density ramp 500 -> 1500 across a lattice block gives the mass of its mean density, 1000 x 0.002 m^3.
+    auto scene = [&](const std::string& name, const std::string& field) {
+        return mpm::test::writeFile(dir + "/" + name + ".json", R"({"simulation": {"dx": 0.02}, "sets": [{"name": "blk",
+            "material": "jelly", "sampling": "lattice", "shape": {"type": "box", "min": [0, 0, 0], "max": [0.2, 0.1, 0.1]},
+            "material_fields": [)" + field + "]}]}");
+    };
+    mpm::test::Result r =
+        mpm::test::runMpm({"validate", scene("nogrid", R"({"param": "density", "source": "vdb", "file": "none.vdb"})")}, dir);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("nogrid.json: /sets/0/material_fields/0/file: "), std::string::npos) << r.output;
+    r = mpm::test::runMpm({"validate", scene("negative", R"({"param": "youngs_modulus", "source": "ramp", "to": [0.2, 0, 0],
+        "from_value": -1e5, "to_value": 1e5})")},
+                          dir);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("/sets/0/material_fields/0: youngs_modulus = -"), std::string::npos) << r.output;
+    r = mpm::test::runMpm({"validate", scene("ramp", R"({"param": "density", "source": "ramp", "to": [0.2, 0, 0],
+        "from_value": 500, "to_value": 1500})")},
+                          dir);
+    EXPECT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("set blk: 2000 particles, 2 kg"), std::string::npos) << r.output;
 }

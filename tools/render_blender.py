@@ -382,9 +382,29 @@ def box_object(c):
     return obj, Matrix.Translation(centre) @ rot
 
 
+def tube_mesh(radius, inner, height, around=96):
+    """A tube about z: its outer and inner walls and the two rings between them, faces facing out of the wall."""
+    verts, faces = [], []
+    for r in (radius, inner):
+        for z in (-0.5 * height, 0.5 * height):
+            for k in range(around):
+                a = 2 * math.pi * k / around
+                verts.append((r * math.cos(a), r * math.sin(a), z))
+    at = lambda wall, top, k: (wall * 2 + top) * around + k % around  # noqa: E731
+    for k in range(around):
+        faces.append((at(0, 0, k), at(0, 0, k + 1), at(0, 1, k + 1), at(0, 1, k)))  # outer wall
+        faces.append((at(1, 0, k), at(1, 1, k), at(1, 1, k + 1), at(1, 0, k + 1)))  # inner wall, facing the axis
+        faces.append((at(0, 1, k), at(0, 1, k + 1), at(1, 1, k + 1), at(1, 1, k)))  # top ring
+        faces.append((at(0, 0, k), at(1, 0, k), at(1, 0, k + 1), at(0, 0, k + 1)))  # bottom ring
+    return mesh_from_data("tube", verts, faces)
+
+
 def cylinder_object(c):
-    bpy.ops.mesh.primitive_cylinder_add(vertices=96, radius=float(c["radius"]), depth=float(c["height"]))
-    obj = bpy.context.active_object
+    if float(c.get("inner_radius", 0)) > 0:
+        obj = tube_mesh(float(c["radius"]), float(c["inner_radius"]), float(c["height"]))
+    else:
+        bpy.ops.mesh.primitive_cylinder_add(vertices=96, radius=float(c["radius"]), depth=float(c["height"]))
+        obj = bpy.context.active_object
     turn = Vector((0, 0, 1)).rotation_difference(vec(c.get("axis", [0, 1, 0])).normalized()).to_matrix().to_4x4()
     return obj, Matrix.Translation(vec(c["center"])) @ turn
 
