@@ -12,15 +12,18 @@ namespace mpm {
 
 namespace {
 
-/// A key visitor (base/Parameters.h) that makes one particle's parameters: the field's value for a key a field
-/// gives, else the set's number as read (so that youngs_modulus goes with the set's poisson_ratio).
-struct ParticleKeys {
+/// A key visitor (base/Parameters.h) that makes one particle's parameters as the scene reader made the set's: a key
+/// a field gives takes the field's value, a key the scene gives its number, and the rest their defaults or what the
+/// material derives from the others (a viscous liquid's shear modulus from its bulk modulus).
+struct ParticleKeys : KeyVisitorArchetype {
     const std::vector<std::pair<std::string, double>>& numbers;
     const std::vector<MaterialFieldDesc>& fields;
     const double* values = nullptr;  ///< this particle's, one per field
     int outOfRange = -1;             ///< the first field whose value lies outside its key's range
     double lo = 0.0, hi = 0.0;       ///< that key's range
 
+    ParticleKeys(const std::vector<std::pair<std::string, double>>& n, const std::vector<MaterialFieldDesc>& f)
+        : numbers(n), fields(f) {}
     template <class T>
     void number(const Key& k, T& value) {
         for (std::size_t f = 0; f < fields.size(); ++f)
@@ -36,18 +39,14 @@ struct ParticleKeys {
                 return;
             }
     }
-    template <class T>
-    void integer(const Key&, T&) {}
-    void flag(const Key&, bool&) {}
-    template <class T>
-    void vec3(const Key&, Eigen::Matrix<T, 3, 1>&) {}
-    void text(const Key&, std::string&) {}
-    template <class E>
-    void choice(const Key&, E&, std::span<const Named<E>>) {}
-    void choice(const Key&, std::string&, const std::vector<std::string>&) {}
-    void choices(const Key&, std::vector<std::string>&, const std::vector<std::string>&) {}
-    void check(bool, std::string_view, const std::string&) {}
-    bool given(std::string_view) { return true; }
+    bool given(std::string_view key) const {
+        for (const MaterialFieldDesc& f : fields)
+            if (f.param == key) return true;
+        for (const auto& n : numbers)
+            if (n.first == key) return true;
+        return false;
+    }
+    // Nested keys see this visitor, not the archetype it builds on.
     template <class F>
     void object(const Key&, F&& f) {
         f(*this);

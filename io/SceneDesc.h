@@ -37,8 +37,8 @@ struct ParticleSetDesc {
     std::string material = "water";  ///< scene name of the material (materials/Materials.h)
     std::string body;                ///< multi_field contact: sets sharing a body name share a velocity field (empty: its own)
     AnyMaterialParams params;        ///< its parameters, overrides applied; the Lame scales below come on top
-    /// The material_params numbers as read, defaults included (youngs_modulus with poisson_ratio: the particle
-    /// parameters of a field are made from them, as `params` was, with the field's value in place of one).
+    /// The material_params numbers the scene gives (youngs_modulus with poisson_ratio: a field's particle parameters
+    /// are made from them and the defaults, as `params` was, with the field's value in place of one).
     std::vector<std::pair<std::string, double>> materialNumbers;
     std::vector<MaterialFieldDesc> materialFields;  ///< parameters given per particle
     SetShape shape;

@@ -265,7 +265,7 @@ void readSet(JsonKeys& n, std::size_t index, SceneDesc& scene) {
     visitMaterialParams(d.params, [&]<class M>(typename M::Params& p) { M::keys(params, p); });
     params.finish();
     for (auto it = params.resolved().begin(); it != params.resolved().end(); ++it)
-        if (it.value().is_number()) d.materialNumbers.emplace_back(it.key(), it.value().get<double>());
+        if (params.has(it.key()) && it.value().is_number()) d.materialNumbers.emplace_back(it.key(), it.value().get<double>());
     n.finish();
     scene.sets.push_back(std::move(d));
 }

@@ -291,3 +291,24 @@ TEST(MaterialFields, ValidateChecksTheFieldsAndCountsTheirMass) {
     EXPECT_EQ(r.code, 0) << r.output;
     EXPECT_NE(r.output.find("set blk: 2000 particles, 2 kg"), std::string::npos) << r.output;
 }
+
+TEST(MaterialFields, AParameterTheMaterialDerivesFollowsTheFieldItDerivesFrom) {
+    // A viscous liquid's shear modulus, unless given, is its bulk modulus times gamma over 4: with a bulk modulus
+    // ramp each particle's follows its own bulk modulus, as a set of that bulk modulus would have it; given, it stays.
+    for (const bool shearGiven : {false, true}) {
+        json scene = json::parse(R"({"simulation": {"dx": 0.02}, "sets": [{"material": "viscous", "sampling": "lattice",
+            "shape": {"type": "box", "min": [0, 0, 0], "max": [0.2, 0.1, 0.1]},
+            "material_fields": [{"param": "bulk_modulus", "source": "ramp", "to": [0.2, 0, 0], "from_value": 1e5,
+                                 "to_value": 3e5}]}]})");
+        if (shearGiven) scene["sets"][0]["material_params"]["shear_modulus"] = 5e4;
+        auto sim = buildSimulation(parseScene(scene.dump(), "viscous.json"));
+        sim->emitDue();
+        const auto& sp = std::get<Species<HerschelBulkley>>(sim->species().at(0));
+        ASSERT_GT(sp.size(), 0u);
+        for (std::size_t i = 0; i < sp.size(); ++i) {
+            const double k = 1e5 + 2e5 * sp.p.x[i][0] / 0.2;
+            EXPECT_NEAR(sp.local[i].bulkModulus / k, 1.0, 1e-5);
+            EXPECT_NEAR(sp.local[i].shearModulus / (shearGiven ? 5e4 : k * sp.local[i].gamma / 4.0), 1.0, 1e-5) << shearGiven;
+        }
+    }
+}
