@@ -54,6 +54,11 @@ Simulation::Simulation(const SimulationSettings& settings)
 float Simulation::kernelInertiaScale() const {
     return withKernel(settings_.transfer.interpolation, []<class K>() { return 1.0f / K::kInverseInertia; });
 }
+/// Whether a species' particles have parameters of their own (Species::perParticle).
+static bool hasParticleParams(const AnySpecies& s) {
+    return std::visit([](const auto& sp) { return sp.perParticle; }, s);
+}
+
 void Simulation::restore(SimState state, bool share) {
     if (state.streamFlow.size() != emitters_.size() || state.streamLayers.size() != emitters_.size())
         throw std::invalid_argument("restore: the state has " + std::to_string(state.streamFlow.size()) +
@@ -61,15 +66,15 @@ void Simulation::restore(SimState state, bool share) {
     if (state.species.size() != state_.species.size())
         throw std::invalid_argument("restore: the state has " + std::to_string(state.species.size()) +
                                     " species, the simulation " + std::to_string(state_.species.size()));
-    for (std::size_t s = 0; s < state.species.size(); ++s)
+    for (std::size_t s = 0; s < state.species.size(); ++s) {
         if (state.species[s].index() != state_.species[s].index())
             throw std::invalid_argument("restore: species " + std::to_string(s) + " has another material");
-        else if (std::visit([](const auto& sp) { return sp.perParticle; }, state.species[s]) !=
-                 std::visit([](const auto& sp) { return sp.perParticle; }, state_.species[s]))
+        if (hasParticleParams(state.species[s]) != hasParticleParams(state_.species[s]))
             throw std::invalid_argument("restore: species " + std::to_string(s) +
-                                        (std::visit([](const auto& sp) { return sp.perParticle; }, state.species[s])
+                                        (hasParticleParams(state.species[s])
                                              ? " has parameters per particle, which the scene does not give"
                                              : " has no parameters per particle, which the scene gives"));
+    }
     for (const Emitter& e : emitters_)
         if (e.released && state.emittedFrame < e.lastEmission())
             throw std::logic_error("restore: an emitter whose samples were released would emit again; restore before emitting");
