@@ -168,6 +168,23 @@ CaseResult manufactured(const CaseConfig& c, WallGhosts ghosts) {
     return finish(sim, wall, worst, true, kv({{"final_error", error()}, {"wave_speed", wave}}));
 }
 
+/// A cantilever's tip deflection: the mean drop of the particles that started in its last cell.
+struct TipDeflection {
+    TipDeflection(const Species<FixedCorotated>& s, double length, double dx) : sp(s) {
+        for (std::size_t i = 0; i < sp.size(); ++i)
+            if (sp.p.x[i][0] > length - dx) rest[sp.p.id[i]] = sp.p.x[i][1];
+    }
+    double operator()() const {
+        double sum = 0;
+        int n = 0;
+        for (std::size_t i = 0; i < sp.size(); ++i)
+            if (auto it = rest.find(sp.p.id[i]); it != rest.end()) sum += it->second - sp.p.x[i][1], ++n;
+        return sum / n;
+    }
+    const Species<FixedCorotated>& sp;
+    std::map<int32_t, double> rest;  ///< by id: the tip particles' initial heights
+};
+
 // 5. Cantilever under its own weight: Euler-Bernoulli plus Timoshenko shear. Sudden gravity makes the
 // tip oscillate between 0 and 2 delta; the mean over whole periods is the static deflection.
 CaseResult cantilever(const CaseConfig& c, WallGhosts ghosts) {
@@ -178,17 +195,7 @@ CaseResult cantilever(const CaseConfig& c, WallGhosts ghosts) {
     const double G = E / (2 * (1 + nu));
     const double delta = 3 * rho * g * std::pow(L, 4) / (2 * E * h * h) + rho * g * L * L / (2 * kappa * G);
     const double f1 = 1.8751 * 1.8751 / (2 * M_PI) * std::sqrt(E * h * h / (12 * rho * std::pow(L, 4)));
-    const double dx = sim.settings().dx;
-    std::map<int32_t, double> rest;  // tip particles (the last cell) and their initial height
-    for (std::size_t i = 0; i < sp.size(); ++i)
-        if (sp.p.x[i][0] > L - dx) rest[sp.p.id[i]] = sp.p.x[i][1];
-    auto deflection = [&] {
-        double sum = 0;
-        int n = 0;
-        for (std::size_t i = 0; i < sp.size(); ++i)
-            if (auto it = rest.find(sp.p.id[i]); it != rest.end()) sum += it->second - sp.p.x[i][1], ++n;
-        return sum / n;
-    };
+    const TipDeflection deflection(sp, L, sim.settings().dx);
     const int periods = 3;
     const double tEnd = periods / f1;
     double weighted = 0, prevT = 0, prevD = 0, wall = 0;
@@ -238,17 +245,7 @@ CaseResult cantileverRamp(const CaseConfig& c) {
     const double delta = sum * (L / kIntervals) / 3.0;
     // The uniform beam's first frequency, for how long to run (four of its periods hold three of this beam's at least).
     const double f1 = 1.8751 * 1.8751 / (2 * M_PI) * std::sqrt(E * h * h / (12 * rho * std::pow(L, 4)));
-    const double dx = sim.settings().dx;
-    std::map<int32_t, double> rest;
-    for (std::size_t i = 0; i < sp.size(); ++i)
-        if (sp.p.x[i][0] > L - dx) rest[sp.p.id[i]] = sp.p.x[i][1];
-    auto deflection = [&] {
-        double total = 0;
-        int n = 0;
-        for (std::size_t i = 0; i < sp.size(); ++i)
-            if (auto it = rest.find(sp.p.id[i]); it != rest.end()) total += it->second - sp.p.x[i][1], ++n;
-        return total / n;
-    };
+    const TipDeflection deflection(sp, L, sim.settings().dx);
     // A Hann-weighted mean over the run: the tip swings about delta with no known period, and the window makes the
     // leftover part of a period weigh next to nothing (a plain mean over whole periods, found by crossings of delta,
     // was thrown off by the higher modes' wiggles at the finest level: 10.6% there).
