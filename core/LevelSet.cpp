@@ -23,6 +23,9 @@ constexpr int kCoarseLog2 = 3;  ///< coarse cells of 8 voxels: the level set's o
 /// cube of it: a scene of dx 1e6 m around a file of 1 cm voxels asked for 1e8 and stalled), and the band's box,
 /// grown by the reach, tells near from far instead. Scenes reach 4 coarse cells at the default voxel of dx/2, 13 at dx/8.
 constexpr int kMaxMaskGrowth = 64;
+/// Sampler::outside looks at most this many leaves (a Poisson-disk tile covers a few in the fields scenes use; a
+/// tile of a coarse sampling in a fine field is left to the search, whose cost it would exceed).
+constexpr long long kMaxOutsideLeaves = 512;
 
 /// Trilinear interpolation of the corners v[4 i + 2 j + k] of a voxel at the fraction f within it.
 double trilinear(const double v[8], const Vec3d& f) {
@@ -124,6 +127,42 @@ bool LevelSet::Sampler::far(const Vec3d& x) {
     return !impl_->nearAcc.isValueOn(openvdb::Coord(int(std::floor(i[0])), int(std::floor(i[1])), int(std::floor(i[2]))));
 }
 LevelSet::Sampler::~Sampler() = default;
+
+bool LevelSet::Sampler::outside(const Vec3d& lo, const Vec3d& hi) {
+    // The voxels the box's trilinear lookups read (the index box of its corners under any transform, grown by a
+    // voxel for rounding), then the leaves over them: none may hold an active voxel there.
+    openvdb::Vec3d a(INFINITY), b(-INFINITY);
+    for (int k = 0; k < 8; ++k) {
+        const openvdb::Vec3d i =
+            impl_->xform.worldToIndex(openvdb::Vec3d(k & 4 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 1 ? hi[2] : lo[2]));
+        a = openvdb::math::minComponent(a, i), b = openvdb::math::maxComponent(b, i);
+    }
+    constexpr double kLargestIndex = double(1 << 30);  // beyond it the voxels' coordinates overflow
+    for (int d = 0; d < 3; ++d)
+        if (!(std::abs(a[d]) < kLargestIndex && std::abs(b[d]) < kLargestIndex)) return false;
+    using Leaf = openvdb::FloatTree::LeafNodeType;
+    const openvdb::CoordBBox box(openvdb::Coord(int(std::floor(a[0])) - 1, int(std::floor(a[1])) - 1, int(std::floor(a[2])) - 1),
+                                 openvdb::Coord(int(std::floor(b[0])) + 2, int(std::floor(b[1])) + 2, int(std::floor(b[2])) + 2));
+    const openvdb::Coord l0 = box.min() >> Leaf::LOG2DIM, l1 = box.max() >> Leaf::LOG2DIM, leaves = l1 - l0 + openvdb::Coord(1);
+    if ((long long)leaves.x() * leaves.y() * leaves.z() > kMaxOutsideLeaves) return false;
+    auto& acc = impl_->acc;
+    for (int x = l0.x(); x <= l1.x(); ++x)
+        for (int y = l0.y(); y <= l1.y(); ++y)
+            for (int z = l0.z(); z <= l1.z(); ++z) {
+                const openvdb::Coord origin = openvdb::Coord(x, y, z) << Leaf::LOG2DIM;
+                if (const Leaf* leaf = acc.probeConstLeaf(origin)) {
+                    if (leaf->isEmpty()) continue;
+                    openvdb::CoordBBox part = leaf->getNodeBoundingBox();
+                    part.intersect(box);
+                    for (auto v = part.begin(); v; ++v)
+                        if (leaf->isValueOn(*v)) return false;
+                } else if (acc.isValueOn(origin)) {
+                    return false;  // an active tile (a whole leaf's worth of voxels or more)
+                }
+            }
+    // No band voxel in reach: the field is +-background over the whole box, with one sign.
+    return phi(0.5 * (lo + hi)) > 0.0;
+}
 
 double LevelSet::Sampler::phi(const Vec3d& x) {
     double v[8];

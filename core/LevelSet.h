@@ -29,6 +29,10 @@ public:
         /// True when x lies farther than `reach` from the band: phi there, and anywhere within reach of x, is
         /// +-background with the sign phi(x) has.
         bool far(const Vec3d& x);
+        /// True when the world box [lo, hi] lies wholly outside the surface and away from the band (phi is
+        /// +background at every point of it), so that no search in it can find an inside point. False where that
+        /// is not so, and, to stay cheap, for a box over more than kMaxOutsideLeaves of the field's leaves.
+        bool outside(const Vec3d& lo, const Vec3d& hi);
 
     private:
         struct Impl;

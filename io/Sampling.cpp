@@ -216,6 +216,11 @@ private:
             else
                 return shape_;
         }();
+        // A tile the shape's field shows to be wholly outside gets no point: skip its lookups (most of the tiles
+        // over a thin or hollow file's box).
+        const Vec3d boxLo = lo_ + t.cast<double>() * (cell_ * kTileCells), boxHi = boxLo + Vec3d::Constant(cell_ * kTileCells);
+        if constexpr (requires { shape.outside(boxLo, boxHi); })
+            if (shape.outside(boxLo, boxHi)) return;
         auto mine = [&](const Vec3d& x) {
             if ((x.array() < lo_.array()).any() || (x.array() >= hi_.array()).any()) return false;
             const Vec3i c = cellOf(x);
@@ -252,7 +257,6 @@ private:
             }
         };
         // Grow from the neighbours' points that can reach into this tile (within 2 r of it).
-        const Vec3d boxLo = lo_ + t.cast<double>() * (cell_ * kTileCells), boxHi = boxLo + Vec3d::Constant(cell_ * kTileCells);
         for (const Tile* tile : around)
             if (tile && tile != &me)
                 for (const Vec3d& x : tile->pts) {

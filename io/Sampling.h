@@ -24,6 +24,8 @@ public:
     /// Serial: the sampler is shared by copies of this region (a task takes its own: withOwnSampler).
     bool contains(const Vec3d& x) const { return sampler_->phi(x) < 0.0; }
     LevelSetInside withOwnSampler() const { return LevelSetInside(ls_, volume_); }
+    /// True when no point of the world box [lo, hi] is inside (a cheap test: see LevelSet::Sampler::outside).
+    bool outside(const Vec3d& lo, const Vec3d& hi) const { return sampler_->outside(lo, hi); }
     double volume() const { return volume_; }
     /// A mesh or a VDB may hold several pieces, thin ones among them: Poisson-disk sampling seeds each one.
     static constexpr bool kMayBeDisconnected = true;

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "core/LevelSetGeometry.h"
 #include "core/LevelSetGrid.h"
@@ -83,6 +84,41 @@ TEST(MeshCollider, AnIcosphereDistanceFieldMatchesTheSphere) {
             }
     EXPECT_GT(samples, 1000);
     EXPECT_LT(worst, 0.1 * voxel) << "largest error " << worst / voxel << " voxels";
+}
+
+// Poisson-disk sampling skips the tiles a file's field shows to be wholly outside (LevelSet::Sampler::outside): a
+// box it calls outside must hold no inside point, by the field and by the sphere's own distance, and boxes clear
+// of the band by more than a leaf must be told apart (else nothing is saved).
+TEST(MeshCollider, ABoxIsCalledOutsideOnlyWhenNoPointOfItIsInside) {
+    const std::string dir = tempDir("outside");
+    const Vec3d c(0.1, 0.2, 0.3);
+    const double r = 0.2, voxel = 0.02;
+    const std::string obj = write(dir + "/ball.obj", icosphereObj(c, r, 4));
+    const auto ls = meshLevelSet(readMesh(obj), obj, voxel, 0.0, 3 * voxel, 3 * voxel, 0.1);
+    LevelSet::Sampler s(*ls);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> at(-0.6, 0.6), size(0.005, 0.15);
+    int calledOutside = 0, clear = 0, clearCalledOutside = 0;
+    for (int n = 0; n < 2000; ++n) {
+        const Vec3d lo = c + Vec3d(at(rng), at(rng), at(rng)), hi = lo + Vec3d(size(rng), size(rng), size(rng));
+        const bool out = s.outside(lo, hi);
+        // The box's nearest point to the centre: the box is clear of the sphere and of the band (3 voxels) plus a
+        // leaf (8 voxels) when that point is.
+        const double gap = (lo.cwiseMax(c).cwiseMin(hi) - c).norm() - r;
+        if (gap > (3 + 8 + 2) * voxel) ++clear, clearCalledOutside += out;
+        if (!out) continue;
+        ++calledOutside;
+        EXPECT_GT(gap, 0.0) << "a box touching the sphere was called outside";
+        for (int i = 0; i <= 4; ++i)
+            for (int j = 0; j <= 4; ++j)
+                for (int k = 0; k <= 4; ++k) {
+                    const Vec3d p = lo + (hi - lo).cwiseProduct(Vec3d(i, j, k) / 4.0);
+                    ASSERT_GT(s.phi(p), 0.0) << "an inside point in a box called outside";
+                }
+    }
+    EXPECT_GT(calledOutside, 500);
+    EXPECT_EQ(clearCalledOutside, clear) << "boxes clear of the band by more than a leaf must be called outside";
+    EXPECT_FALSE(s.outside(c - Vec3d::Constant(0.01), c + Vec3d::Constant(0.01)));  // deep inside
 }
 
 TEST(MeshCollider, AnOpenMeshNeedsAThicknessAndBadFilesAreNamed) {
