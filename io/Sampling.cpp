@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -339,26 +340,43 @@ std::vector<Vec3d> shareOf(std::vector<Vec3d> all, SamplePart part) {
     return std::vector<Vec3d>(all.begin() + std::ptrdiff_t(begin), all.begin() + std::ptrdiff_t(end));
 }
 
+/// An exact count is met by sampling again, finer, while the shape holds fewer points (a sphere holds a few
+/// lattice points less than its volume implies). Far short of it (under kFarShort of the count: a file's field
+/// that holds much less than the volume it reports) the spacing shrinks at once by the cube root of the share
+/// found, or halves when none was; and it may not shrink below 1 / kFinestSpacing of the first one (8 times the
+/// density the volume implies): a shape that still holds too few is an error, not an endless refinement.
+constexpr double kFarShort = 0.5;
+constexpr double kEmptyStep = 0.5;
+constexpr double kFinestSpacing = 2.0;
+
 template <class Shape>
 std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCell, long long count, Sampling method,
                             unsigned seed, SamplePart part) {
     const double perVolume = count > 0 ? double(count) / shape.volume() : particlesPerCell / (dx * dx * dx);
-    std::vector<Vec3d> pts;
-    if (method != Sampling::Poisson) {
-        const double jitter = method == Sampling::Grid ? kGridJitter : 0.0;
-        double spacing = std::cbrt(1.0 / perVolume);
-        if (count <= 0) return jitteredGrid(shape, spacing, jitter, seed, part);
-        const SamplePart whole{0, 1, part.stop};
-        pts = jitteredGrid(shape, spacing, jitter, seed, whole);
-        // A sphere may hold slightly fewer lattice points than asked: refine until there are enough.
-        while (count > 0 && (long long)pts.size() < count) pts = jitteredGrid(shape, spacing *= 0.97, jitter, seed, whole);
-    } else {
-        double r = std::cbrt(1.0 / (kPoissonPacking * perVolume));
-        // A set given by its density samples its part alone; an exact count picks from the whole.
-        if (count <= 0) return poissonDiskIn(shape, r, seed, part);
-        const SamplePart whole{0, 1, part.stop};
-        pts = poissonDiskIn(shape, r, seed, whole);
-        while ((long long)pts.size() < count) pts = poissonDiskIn(shape, r *= 0.95, seed, whole);
+    const bool poisson = method == Sampling::Poisson;
+    const double jitter = method == Sampling::Grid ? kGridJitter : 0.0;
+    // The lattice's spacing, or the Poisson-disk radius.
+    double spacing = poisson ? std::cbrt(1.0 / (kPoissonPacking * perVolume)) : std::cbrt(1.0 / perVolume);
+    auto sample = [&](double at, SamplePart p) {
+        return poisson ? poissonDiskIn(shape, at, seed, p) : jitteredGrid(shape, at, jitter, seed, p);
+    };
+    // A set given by its density samples its part alone; an exact count picks from the whole.
+    if (count <= 0) return sample(spacing, part);
+    const SamplePart whole{0, 1, part.stop};
+    std::vector<Vec3d> pts = sample(spacing, whole);
+    const double finest = spacing / kFinestSpacing, step = poisson ? 0.95 : 0.97;
+    while ((long long)pts.size() < count) {
+        const double found = double(pts.size()) / double(count);
+        spacing *= found >= kFarShort ? step : found > 0.0 ? std::cbrt(found) : kEmptyStep;
+        if (spacing < finest) {
+            std::ostringstream why;
+            why << "it holds " << pts.size() << " of the " << count << " particles `count` asks for, even sampled at "
+                << kFinestSpacing * kFinestSpacing * kFinestSpacing << " times the density its volume (" << shape.volume()
+                << " m^3) implies; a file's field may be too coarse for its thin parts (a smaller voxel_size), or ask "
+                   "for fewer particles";
+            throw std::domain_error(why.str());
+        }
+        pts = sample(spacing, whole);
     }
     if (count > 0 && (long long)pts.size() > count) {
         std::mt19937 rng(seed ^ 0x9e3779b9u);

@@ -86,7 +86,8 @@ struct SamplePart {
 /// Samples the shape. With count > 0 exactly count points are returned (a random subset of a denser
 /// sampling, which keeps the minimum spacing); otherwise particlesPerCell sets the density. A set given by
 /// its density holds only its part's points (a Poisson-disk set samples only its part's tiles); one given by
-/// its count is sampled whole and then cut.
+/// its count is sampled whole and then cut. Throws std::domain_error when the shape holds fewer than count points
+/// even at 8 times the density its volume implies, and std::length_error when it spans too many Poisson tiles.
 std::vector<Vec3d> sampleShape(const SetRegion& shape, double dx, double particlesPerCell, long long count, Sampling method,
                                unsigned seed, SamplePart part = {});
 

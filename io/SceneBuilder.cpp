@@ -514,6 +514,8 @@ static SetSamples sampleSetShape(const SetEntry& set, const SamplePart& part) {
         out.positions = sampleShape(r.region, scene.settings.dx / s, d.particlesPerCell, d.count, d.sampling, d.seed, part);
     } catch (const std::length_error& e) {
         throw SceneError(set.at("shape") + ": " + e.what() + "; split the set into shorter ones");
+    } catch (const std::domain_error& e) {  // an exact count the shape cannot hold
+        throw SceneError(set.at("shape") + ": " + e.what());
     }
     if (!r.placement.identity())
         for (Vec3d& x : out.positions) x = r.placement.apply(x);

@@ -41,10 +41,18 @@ srcs=(tests/fuzz/fuzz_scene.cpp io/SceneReader.cpp io/SceneBudget.cpp io/SceneBu
 uncovered=(io/Sampling.cpp)
 # Rebuild only when a source, this script or the Release configuration changed.
 if [ ! -x "$build/fuzz_scene" ] || [ -n "$(find "${srcs[@]}" "${uncovered[@]}" io core materials sparse tests/fuzz/sanitizer-ignore.txt tests/fuzz/coverage-ignore.txt tools/fuzz.sh "$release/CMakeCache.txt" "${libs[@]:0:3}" -newer "$build/fuzz_scene" -print -quit)" ]; then
+  plain=()  # the flags without the fuzzer's instrumentation
+  for f in "${flags[@]}"; do
+    case "$f" in
+      -fsanitize=fuzzer,address,undefined) plain+=(-fsanitize=address,undefined) ;;
+      -fsanitize-coverage-ignorelist=*) ;;
+      *) plain+=("$f") ;;
+    esac
+  done
   objs=()
   for src in "${uncovered[@]}"; do
     obj="$build/$(basename "${src%.cpp}").o"
-    "$CXX" "${flags[@]/-fsanitize=fuzzer,address,undefined/-fsanitize=address,undefined}" -O2 -c "$src" -o "$obj"
+    "$CXX" "${plain[@]}" -O2 -c "$src" -o "$obj"
     objs+=("$obj")
   done
   "$CXX" "${flags[@]}" "${srcs[@]}" "${objs[@]}" "${libs[@]}" -o "$build/fuzz_scene"
