@@ -343,10 +343,9 @@ std::vector<Vec3d> shareOf(std::vector<Vec3d> all, SamplePart part) {
 /// An exact count is met by sampling again, finer, while the shape holds fewer points (a sphere holds a few
 /// lattice points less than its volume implies). Far short of it (under kFarShort of the count: a file's field
 /// that holds much less than the volume it reports) the spacing shrinks at once by the cube root of the share
-/// found, or halves when none was; and it may not shrink below 1 / kFinestSpacing of the first one (8 times the
-/// density the volume implies): a shape that still holds too few is an error, not an endless refinement.
+/// found; and it may not shrink below 1 / kFinestSpacing of the first one (8 times the density the volume
+/// implies): a shape that would need more, or holds no point at all, is an error, not an endless refinement.
 constexpr double kFarShort = 0.5;
-constexpr double kEmptyStep = 0.5;
 constexpr double kFinestSpacing = 2.0;
 
 template <class Shape>
@@ -367,11 +366,12 @@ std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCe
     const double finest = spacing / kFinestSpacing, step = poisson ? 0.95 : 0.97;
     while ((long long)pts.size() < count) {
         const double found = double(pts.size()) / double(count);
-        spacing *= found >= kFarShort ? step : found > 0.0 ? std::cbrt(found) : kEmptyStep;
+        spacing *= found >= kFarShort ? step : std::cbrt(found);
         if (spacing < finest) {
             std::ostringstream why;
-            why << "it holds " << pts.size() << " of the " << count << " particles `count` asks for, even sampled at "
-                << kFinestSpacing * kFinestSpacing * kFinestSpacing << " times the density its volume (" << shape.volume()
+            why << "it holds " << pts.size() << " of the " << count << " particles `count` asks for, and would need "
+                << "sampling at more than " << kFinestSpacing * kFinestSpacing * kFinestSpacing
+                << " times the density its volume (" << shape.volume()
                 << " m^3) implies; a file's field may be too coarse for its thin parts (a smaller voxel_size), or ask "
                    "for fewer particles";
             throw std::domain_error(why.str());

@@ -1016,6 +1016,15 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
     return sim;
 }
 
+double setFieldBytes(const SetEntry& set) {
+    const auto* mesh = std::get_if<MeshShape>(&set.desc().shape);
+    if (!mesh) return 0.0;
+    // Built in the file's coordinates, where the cells are dx / scale (levelSetOf with place false).
+    const SceneDesc& scene = set.scene;
+    const MeshField f = meshField(scene, set.path("shape"), *mesh, false, false);
+    return meshFieldBytes(f.mesh, f.voxel, meshBand(scene.settings.dx / mesh->transform.scale, f.voxel).width(*mesh));
+}
+
 double colliderFieldBytes(const ColliderEntry& collider) {
     const SceneDesc& scene = collider.scene;
     const ColliderDesc& c = collider.desc();
