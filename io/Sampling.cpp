@@ -217,8 +217,8 @@ private:
             else
                 return shape_;
         }();
-        // A tile the shape's field shows to be wholly outside gets no point: skip its lookups (most of the tiles
-        // over a thin or hollow file's box).
+        // A tile the shape's field shows to be wholly outside gets no point: skip its lookups (the tiles of a thin
+        // or hollow file's box away from its surface).
         const Vec3d boxLo = lo_ + t.cast<double>() * (cell_ * kTileCells), boxHi = boxLo + Vec3d::Constant(cell_ * kTileCells);
         if constexpr (requires { shape.outside(boxLo, boxHi); })
             if (shape.outside(boxLo, boxHi)) return;
@@ -378,7 +378,7 @@ std::vector<Vec3d> sampleIn(const Shape& shape, double dx, double particlesPerCe
         }
         pts = sample(spacing, whole);
     }
-    if (count > 0 && (long long)pts.size() > count) {
+    if ((long long)pts.size() > count) {
         std::mt19937 rng(seed ^ 0x9e3779b9u);
         std::shuffle(pts.begin(), pts.end(), rng);
         pts.resize(std::size_t(count));
