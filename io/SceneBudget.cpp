@@ -35,6 +35,17 @@ std::string gib(double bytes) {
     return s.str();
 }
 
+/// The fields a budget holds, to follow a particle count: " and X of collider distance fields", ", X of collider
+/// distance fields and Y of the sets' distance fields", or nothing.
+std::string fieldsInWords(const SceneBudget& b) {
+    const std::string colliders = gib(b.colliderBytes) + " of collider distance fields",
+                      sets = gib(b.setFieldBytes) + " of the sets' distance fields";
+    if (b.colliderBytes > 0.0 && b.setFieldBytes > 0.0) return ", " + colliders + " and " + sets;
+    if (b.colliderBytes > 0.0) return " and " + colliders;
+    if (b.setFieldBytes > 0.0) return " and " + sets;
+    return "";
+}
+
 /// Bytes of one particle of material M: every per-particle array, and the permutation buffer's share (it
 /// is as wide as the widest array).
 template <class M>
@@ -281,7 +292,10 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
     }
     // Every rank holds every collider's field whole.
     for (std::size_t i = 0; i < scene.colliders.size(); ++i) b.colliderBytes += colliderFieldBytes(ColliderEntry(scene, i));
-    b.memoryBytes += b.colliderBytes;
+    // The sets' fields live while the scene is built, beside the particles sampled so far: the overlap test holds
+    // every set's region at once. Counted as if they lived on with the colliders', an upper bound.
+    for (std::size_t i = 0; i < scene.sets.size(); ++i) b.setFieldBytes += setFieldBytes(SetEntry(scene, i));
+    b.memoryBytes += b.colliderBytes + b.setFieldBytes;
     const MemoryLimit limit = memoryLimit();
     b.machineBytes = limit.bytes;
     b.machineHolder = limit.holder;
@@ -294,10 +308,9 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
                                                         : ")")
                                   : "the run") +
             " needs about " + gib(b.memoryBytes) + " for about " + std::to_string((long long)b.peakParticles) + " particles" +
-            (b.colliderBytes > 0.0 ? " and " + gib(b.colliderBytes) + " of collider distance fields" : "") + ", and " +
-            b.machineHolder + " " + gib(b.machineBytes) +
+            fieldsInWords(b) + ", and " + b.machineHolder + " " + gib(b.machineBytes) +
             "; use fewer particles (particles_per_cell, count, duration) or a larger dx" +
-            (b.colliderBytes > 0.0 ? ", or a coarser voxel_size for mesh colliders" : ""));
+            (b.colliderBytes + b.setFieldBytes > 0.0 ? ", or a coarser voxel_size for the meshes" : ""));
     return b;
 }
 
@@ -308,7 +321,7 @@ std::string describeBudget(const SceneBudget& b) {
           << " kg, " << set.volume << " m^3 per emission; " << set.emissions << " emission" << (set.emissions == 1 ? "" : "s")
           << "\n";
     s << "memory: about " << gib(b.memoryBytes) << " at the peak (" << (long long)b.peakParticles << " particles";
-    if (b.colliderBytes > 0.0) s << ", and " << gib(b.colliderBytes) << " of collider distance fields";
+    s << fieldsInWords(b);
     s << "); " << b.machineHolder << " " << gib(b.machineBytes) << "\n";
     s << "substeps per frame: about " << b.substepsPerFrame << " at the start (dt = " << b.dt << " s, set by " << b.stepCause
       << ")\n";

@@ -22,8 +22,9 @@ struct SetBudget {
 struct SceneBudget {
     std::vector<SetBudget> sets;
     double peakParticles = 0.0;                      ///< once every emission is done
-    double memoryBytes = 0.0;                        ///< peak, estimated, the colliders' fields included
+    double memoryBytes = 0.0;                        ///< peak, estimated, the colliders' and sets' fields included
     double colliderBytes = 0.0;                      ///< the distance fields of the colliders read from files
+    double setFieldBytes = 0.0;                      ///< the sets' read from files, all held while overlaps are tested
     double machineBytes = 0.0;                       ///< the memory this process may use (io/SceneBudget.h, memoryLimit)
     std::string machineHolder = "this machine has";  ///< what sets it, in words
     double substepsPerFrame = 0.0;                   ///< at the start

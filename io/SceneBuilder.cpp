@@ -150,11 +150,17 @@ void refuseFieldTooLarge(const SceneDesc& scene, const std::string& where, const
     }
 }
 
+/// The grid's cell in the coordinates a mesh's field is built in: the world's (placed, a collider), or the file's
+/// (a set, sampled there and then placed), where it is dx / scale.
+double cellInField(const SceneDesc& scene, const MeshShape& m, bool place) {
+    return scene.settings.dx / (place ? 1.0 : m.transform.scale);
+}
+
 /// The level set of a file shape, built or read once: placed by its transform (a collider), or in the file's
 /// own coordinates (`placed` false: a set, sampled there and then placed).
 std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const MeshShape& m,
                                            bool place = true, bool solidOutside = false, FieldNotes* notes = nullptr) {
-    const double dx = scene.settings.dx / (place ? 1.0 : m.transform.scale);
+    const double dx = cellInField(scene, m, place);
     const MeshField f = meshField(scene, where, m, place, solidOutside);
     if (const std::size_t open = notes && notes->keepMesh ? f.mesh.openEdges() : 0; open > 0)
         throw SceneError(scene.file + ": " + where + "/file: " + m.file + ": a rigid body's mesh must be closed (watertight); " +
@@ -1017,12 +1023,22 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
 }
 
 double setFieldBytes(const SetEntry& set) {
-    const auto* mesh = std::get_if<MeshShape>(&set.desc().shape);
-    if (!mesh) return 0.0;
-    // Built in the file's coordinates, where the cells are dx / scale (levelSetOf with place false).
     const SceneDesc& scene = set.scene;
-    const MeshField f = meshField(scene, set.path("shape"), *mesh, false, false);
-    return meshFieldBytes(f.mesh, f.voxel, meshBand(scene.settings.dx / mesh->transform.scale, f.voxel).width(*mesh));
+    const std::string where = set.path("shape");
+    // Built as levelSetOf builds it for a set: in the file's coordinates (place false), a VDB file's band as it is.
+    if (const auto* mesh = std::get_if<MeshShape>(&set.desc().shape)) {
+        const MeshField f = meshField(scene, where, *mesh, false, false);
+        return meshFieldBytes(f.mesh, f.voxel, meshBand(cellInField(scene, *mesh, false), f.voxel).width(*mesh));
+    }
+    if (const auto* vdb = std::get_if<VdbShape>(&set.desc().shape)) {
+        if (vdb->file.find("$F") != std::string::npos) return 0.0;  // refused when the set is built
+        try {
+            return vdbFieldBytes(besideScene(scene, vdb->file), vdb->grid, 1.0, 0.0);
+        } catch (const LevelSetError& e) {
+            throw SceneError(scene.file + ": " + where + "/file: " + e.what());
+        }
+    }
+    return 0.0;
 }
 
 double colliderFieldBytes(const ColliderEntry& collider) {

@@ -94,8 +94,8 @@ struct SetupWatch {
 std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm = Comm::single(),
                                             DerivedValues* derived = nullptr, const SetupWatch& watch = {});
 
-/// The distance field a set's mesh shape builds, estimated from the mesh (read, not converted) [bytes]; 0 for
-/// other shapes (a VDB set's field is the file's).
+/// The distance field a set read from a file holds while it is sampled [bytes], known before it is built: a mesh's
+/// from the mesh (read, not converted), a VDB file's from its grid's metadata; 0 for a shape with a formula.
 double setFieldBytes(const SetEntry& set);
 /// About how many bytes the collider's distance field takes while it is built and used: a mesh's from its surface at
 /// the voxel the builder picks (io/LevelSets.h, meshFieldBytes), a VDB file's from its grid's metadata (vdbFieldBytes);
