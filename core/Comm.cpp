@@ -17,6 +17,12 @@ namespace mpm {
 namespace {
 Comm gWorld;
 bool gStarted = false;
+#ifdef MPM_HAVE_MPI
+/// Calls of Comm::exchange so far: every rank makes them in the same order.
+unsigned long long gExchanges = 0;
+/// Comm::exchange's tags, kExchangeTag to kExchangeTag + 3 (gatherToRoot's are 1 and 2).
+constexpr int kExchangeTag = 3;
+#endif
 
 /// Adds the seconds of a scope to a counter.
 struct Timed {
@@ -166,35 +172,60 @@ std::vector<Bytes> Comm::gatherToRoot(const Bytes& mine) const {
 std::vector<Bytes> Comm::exchange(const std::vector<Bytes>& out) const {
     if (!distributed()) return {out.at(0)};
     Timed t{seconds_};
-    std::vector<unsigned long long> sendSize(size_), recvSize(size_);
-    for (int r = 0; r < size_; ++r) sendSize[r] = out[r].size();
-    MPI_Alltoall(sendSize.data(), 1, MPI_UNSIGNED_LONG_LONG, recvSize.data(), 1, MPI_UNSIGNED_LONG_LONG, MPI_COMM_WORLD);
-    std::vector<Bytes> in(size_);
-    std::vector<MPI_Request> requests;
+    // Sparse exchange without a neighbour list (NBX, Hoefler et al. 2010): each rank sends, synchronously, only to
+    // the ranks it has bytes for, and receives whatever arrives until every rank has seen its own sends received;
+    // a non-blocking barrier tells when that is. Sizes and bytes pass between neighbours only, and nobody needs
+    // to know beforehand who its neighbours are (a leaf can appear anywhere: emission, migration, a re-cut).
+    // Calls alternate between two pairs of tags: a rank that has left a call can send the next call's first
+    // message to a rank still waiting on the barrier of this one, never one of the call after.
+    const int parity = int(gExchanges++ % 2);
+    const int sizeTag = kExchangeTag + parity, pieceTag = kExchangeTag + 2 + parity;
     // Pieces of at most kPiece bytes (an MPI count is an int); messages of one sender and tag arrive in order.
     constexpr unsigned long long kPiece = 1ull << 30;
+    std::vector<unsigned long long> sendSize(size_);
+    std::vector<MPI_Request> sends, receives;
     for (int r = 0; r < size_; ++r) {
-        if (r == rank_) {
-            in[r] = out[r];
-            continue;
-        }
-        in[r].resize(recvSize[r]);
-        for (unsigned long long at = 0; at < recvSize[r]; at += kPiece) {
-            requests.emplace_back();
-            MPI_Irecv(in[r].data() + at, int(std::min(kPiece, recvSize[r] - at)), MPI_BYTE, r, 3, MPI_COMM_WORLD,
-                      &requests.back());
-        }
-    }
-    for (int r = 0; r < size_; ++r) {
-        if (r == rank_) continue;
+        sendSize[r] = out[r].size();
+        if (r == rank_ || sendSize[r] == 0) continue;
+        sends.emplace_back();
+        MPI_Issend(&sendSize[r], 1, MPI_UNSIGNED_LONG_LONG, r, sizeTag, MPI_COMM_WORLD, &sends.back());
         for (unsigned long long at = 0; at < sendSize[r]; at += kPiece) {
-            requests.emplace_back();
-            MPI_Isend(out[r].data() + at, int(std::min(kPiece, sendSize[r] - at)), MPI_BYTE, r, 3, MPI_COMM_WORLD,
-                      &requests.back());
+            sends.emplace_back();
+            MPI_Issend(out[r].data() + at, int(std::min(kPiece, sendSize[r] - at)), MPI_BYTE, r, pieceTag, MPI_COMM_WORLD,
+                       &sends.back());
         }
         bytesSent_ += sendSize[r];
     }
-    MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+    std::vector<Bytes> in(size_);
+    in[rank_] = out[rank_];
+    MPI_Request barrier = MPI_REQUEST_NULL;
+    for (bool allSent = false;;) {
+        int arrived = 0;
+        MPI_Status status;
+        MPI_Iprobe(MPI_ANY_SOURCE, sizeTag, MPI_COMM_WORLD, &arrived, &status);
+        if (arrived) {
+            const int from = status.MPI_SOURCE;
+            unsigned long long n = 0;
+            MPI_Recv(&n, 1, MPI_UNSIGNED_LONG_LONG, from, sizeTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+            in[from].resize(n);
+            for (unsigned long long at = 0; at < n; at += kPiece) {
+                receives.emplace_back();
+                MPI_Irecv(in[from].data() + at, int(std::min(kPiece, n - at)), MPI_BYTE, from, pieceTag, MPI_COMM_WORLD,
+                          &receives.back());
+            }
+            continue;
+        }
+        if (allSent) {
+            int done = 0;
+            MPI_Test(&barrier, &done, MPI_STATUS_IGNORE);
+            if (done) break;
+        } else {
+            int done = 0;
+            MPI_Testall(int(sends.size()), sends.data(), &done, MPI_STATUSES_IGNORE);
+            if (done) MPI_Ibarrier(MPI_COMM_WORLD, &barrier), allSent = true;
+        }
+    }
+    MPI_Waitall(int(receives.size()), receives.data(), MPI_STATUSES_IGNORE);
     return in;
 }
 void Comm::abort(int code) const {

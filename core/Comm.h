@@ -47,8 +47,8 @@ public:
     std::vector<Bytes> allGather(const Bytes& mine) const;
     /// Every rank's bytes on rank 0 (empty elsewhere), in rank order.
     std::vector<Bytes> gatherToRoot(const Bytes& mine) const;
-    /// out[r] goes to rank r; returns what each rank sent here. Sizes go all-to-all first (a few bytes per
-    /// pair); the payloads only between ranks that have something for each other (point to point).
+    /// out[r] goes to rank r; returns what each rank sent here. Sizes and payloads pass only between ranks that
+    /// have something for each other (point to point), and a non-blocking barrier ends the exchange.
     std::vector<Bytes> exchange(const std::vector<Bytes>& out) const;
     /// Ends every rank at once with this exit code (a failure that only one rank saw).
     [[noreturn]] void abort(int code) const;
