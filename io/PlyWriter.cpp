@@ -51,6 +51,9 @@ void writePly(const std::string& path, const PointCloud& f, const std::vector<st
     if (Jp) header += "property float Jp\n";
     if (stress) header += "property float stress_norm\n";
     if (plastic) header += "property float plastic_strain\n";
+    const auto written = [&](const std::vector<float>& column) { return column.size() == n && n > 0; };
+    for (const auto& [name, values] : f.parameters)
+        if (written(values)) header += "property float " + name + "\n";
     if (F)
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c) header += "property float F" + std::to_string(r) + std::to_string(c) + "\n";
@@ -72,6 +75,8 @@ void writePly(const std::string& path, const PointCloud& f, const std::vector<st
             if (Jp) rec.put<float>(f.Jp[i]);
             if (stress) rec.put<float>(f.stressNorm[i]);
             if (plastic) rec.put<float>(f.plasticStrain[i]);
+            for (const auto& [name, values] : f.parameters)
+                if (written(values)) rec.put<float>(values[i]);
             if (F)
                 for (int r = 0; r < 3; ++r)
                     for (int c = 0; c < 3; ++c) rec.put<float>(f.F[i](r, c));

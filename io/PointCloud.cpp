@@ -1,5 +1,6 @@
 #include "io/PointCloud.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -18,6 +19,8 @@ PointAttributes PointAttributes::of(const std::vector<std::string>& requested) {
             a.F = true;
         else if (r == "plastic_strain")
             a.plasticStrain = true;
+        else if (std::find(parameterNames().begin(), parameterNames().end(), r) != parameterNames().end())
+            a.parameters.push_back(r);
         else
             throw std::invalid_argument("unknown point attribute \"" + r + "\"");
     }
@@ -25,6 +28,28 @@ PointAttributes PointAttributes::of(const std::vector<std::string>& requested) {
 }
 
 namespace {
+
+/// Material parameter `name` (PointAttributes::parameterNames) of a parameter set, in SI units, read from what
+/// the model keeps: Young's modulus and Poisson's ratio back from mu and lambda (E = mu (3 lambda + 2 mu) /
+/// (lambda + mu), nu = lambda / (2 (lambda + mu))), and 0 where the model has no such parameter.
+template <class Params>
+float parameterValue(const Params& m, const std::string& name) {
+    constexpr bool kLame = requires { m.mu + m.lambda; };
+    if (name == "density") return m.density;
+    if constexpr (kLame) {
+        const double mu = m.mu, lambda = m.lambda;
+        if (name == "youngs_modulus") return float(mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu));
+        if (name == "poisson_ratio") return float(lambda / (2.0 * (lambda + mu)));
+        if (name == "bulk_modulus") return float(lambda + 2.0 * mu / 3.0);
+    }
+    if constexpr (requires { m.bulkModulus; })
+        if (name == "bulk_modulus") return m.bulkModulus;
+    if constexpr (requires { m.viscosity; })
+        if (name == "viscosity") return m.viscosity;
+    if constexpr (requires { m.yieldStress; })
+        if (name == "yield_stress") return m.yieldStress;
+    return 0.0f;
+}
 
 /// Appends the per-particle quantities of one species that the attributes ask for, through the model's own
 /// functions (materials/Materials.h): tau / J for the stress, and F and Jp where the model keeps them.
@@ -56,6 +81,14 @@ void appendMaterialAttributes(const Sp& sp, const PointAttributes& a, PointCloud
                 f.plasticStrain.push_back(0.0f);
         }
     }
+    for (std::size_t k = 0; k < a.parameters.size(); ++k) {
+        std::vector<float>& column = f.parameters[k].second;
+        if (!sp.perParticle) {
+            column.insert(column.end(), n, parameterValue(sp.params, a.parameters[k]));
+            continue;
+        }
+        for (std::size_t i = 0; i < n; ++i) column.push_back(parameterValue(sp.paramsOf(i), a.parameters[k]));
+    }
 }
 
 /// Appends [a, b) of `from` to `to` when `from` holds anything.
@@ -77,6 +110,7 @@ PointCloud gatherPoints(const std::vector<AnySpecies>& species, const std::vecto
     f.material.reserve(n);
     f.set.reserve(n);
     f.pscale.reserve(n);
+    for (const std::string& name : attributes.parameters) f.parameters.emplace_back(name, std::vector<float>{});
     for (std::size_t s = 0; s < species.size(); ++s) {
         const ParticleArrays& P = particlesOf(species[s]);
         f.x.insert(f.x.end(), P.x.begin(), P.x.end());
@@ -109,6 +143,11 @@ PointCloud PointCloud::subset(const std::vector<int>& species) const {
         appendRange(out.stressNorm, stressNorm, a, b);
         appendRange(out.plasticStrain, plasticStrain, a, b);
         appendRange(out.F, F, a, b);
+        out.parameters.resize(parameters.size());
+        for (std::size_t k = 0; k < parameters.size(); ++k) {
+            out.parameters[k].first = parameters[k].first;
+            appendRange(out.parameters[k].second, parameters[k].second, a, b);
+        }
         out.speciesStart.push_back(out.x.size());
     }
     return out;

@@ -129,6 +129,7 @@ PointDataGrid::Ptr makePoints(const PointCloud& f, double voxelSize, const VdbFr
         if (!f.stressNorm.empty()) addAttribute<float>(*grid, *index, "stress_norm", f.stressNorm);
         if (!f.plasticStrain.empty()) addAttribute<float>(*grid, *index, "plastic_strain", f.plasticStrain);
         if (!f.F.empty()) addAttribute<openvdb::math::Mat3s>(*grid, *index, "F", f.F);
+        for (const auto& [name, values] : f.parameters) addAttribute<float>(*grid, *index, name.c_str(), values);
         const auto groups = addGroups(*grid, *index, f, full->materialNames, full->setNames);
         grid->insertMeta("group_names", openvdb::StringMetadata(nlohmann::json(groups).dump()));
     }
@@ -284,6 +285,15 @@ PointsReadBack readVdbPoints(const std::string& path) {
         std::unique_ptr<openvdb::points::AttributeHandle<openvdb::math::Mat3s>> F;
         if (leaf->hasAttribute("F"))
             F = std::make_unique<openvdb::points::AttributeHandle<openvdb::math::Mat3s>>(leaf->constAttributeArray("F"));
+        // Columns first, then pointers to them: adding a column moves the others.
+        const auto columnOf = [&](const std::string& name) {
+            return std::find_if(out.parameters.begin(), out.parameters.end(), [&](const auto& c) { return c.first == name; });
+        };
+        for (const std::string& name : PointAttributes::parameterNames())
+            if (leaf->hasAttribute(name) && columnOf(name) == out.parameters.end()) out.parameters.push_back({name, {}});
+        std::vector<std::pair<std::vector<float>*, std::unique_ptr<FloatHandle>>> parameters;
+        for (const std::string& name : PointAttributes::parameterNames())
+            if (leaf->hasAttribute(name)) parameters.emplace_back(&columnOf(name)->second, optional(name.c_str()));
         std::vector<std::pair<std::vector<bool>*, openvdb::points::GroupHandle>> groups;
         for (auto& [group, members] : out.groups)
             if (leaf->attributeSet().descriptor().hasGroup(group)) groups.emplace_back(&members, leaf->groupHandle(group));
@@ -311,6 +321,7 @@ PointsReadBack readVdbPoints(const std::string& path) {
                     for (int c = 0; c < 3; ++c) e(r, c) = m(r, c);
                 out.F.push_back(e);
             }
+            for (auto& [column, handle] : parameters) column->push_back(handle->get(*it));
             for (auto& [members, handle] : groups) members->push_back(handle.get(*it));
         }
     }

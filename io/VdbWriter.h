@@ -57,9 +57,10 @@ struct PointsReadBack {
     std::vector<float> pscale, J, Jp, stressNorm, plasticStrain;
     std::vector<Vec3f> Cd;
     std::vector<Mat3f> F;
-    std::vector<std::string> materialNames, setNames;  ///< from the grid's metadata
-    std::map<std::string, std::string> groupNames;     ///< point group -> the material or set name it stands for
-    std::map<std::string, std::vector<bool>> groups;   ///< point group -> membership, point by point
+    std::vector<std::pair<std::string, std::vector<float>>> parameters;  ///< the material parameters written
+    std::vector<std::string> materialNames, setNames;                    ///< from the grid's metadata
+    std::map<std::string, std::string> groupNames;    ///< point group -> the material or set name it stands for
+    std::map<std::string, std::vector<bool>> groups;  ///< point group -> membership, point by point
 };
 PointsReadBack readVdbPoints(const std::string& path);
 /// Reads back the "bodies" grid of a file (empty when it has none).

@@ -66,6 +66,7 @@ py::dict pointDict(const Points& p) {
     if (!p.stressNorm.empty()) d["stress_norm"] = scalars(p.stressNorm);
     if (!p.plasticStrain.empty()) d["plastic_strain"] = scalars(p.plasticStrain);
     if (!p.F.empty()) d["F"] = matrices(p.F);
+    for (const auto& [name, values] : p.parameters) d[py::str(name)] = scalars(values);
     return d;
 }
 
@@ -234,8 +235,8 @@ PYBIND11_MODULE(sparse_mpm, m) {
         py::arg("path"),
         "The points of a frame file (<scene>_NNNN.vdb or <scene>_points_NNNN.vdb): a dict of numpy arrays keyed by attribute "
         "name: P (n, 3) float64, v (n, 3) float32, id, material, set (int32), and pscale, Cd, J, Jp, stress_norm, "
-        "plastic_strain, F "
-        "(n, 3, 3) where the file has them.");
+        "plastic_strain, F (n, 3, 3) and the material parameters (density, youngs_modulus, poisson_ratio, bulk_modulus, "
+        "viscosity, yield_stress) where the file has them.");
     m.def(
         "material_colours",
         [] {

@@ -10,8 +10,10 @@
 #include <fstream>
 #include <map>
 
+#include "io/PointFile.h"
 #include "io/SceneBuilder.h"
 #include "io/SceneReader.h"
+#include "io/VdbWriter.h"
 #include "tests/ProgramRuns.h"
 #include "tests/SceneVariants.h"
 
@@ -310,5 +312,64 @@ TEST(MaterialFields, AParameterTheMaterialDerivesFollowsTheFieldItDerivesFrom) {
             EXPECT_NEAR(sp.local[i].bulkModulus / k, 1.0, 1e-5);
             EXPECT_NEAR(sp.local[i].shearModulus / (shearGiven ? 5e4 : k * sp.local[i].gamma / 4.0), 1.0, 1e-5) << shearGiven;
         }
+    }
+}
+
+TEST(MaterialFields, FramesCarryEachParticlesParametersAsAttributes) {
+    // output.attributes may name material parameters: each particle's own where a field gives them, its set's
+    // elsewhere. A jelly block whose Young's modulus and density ramp along x, beside a water set, written after a frame
+    // without gravity (the particles still at their seeds): each jelly point's youngs_modulus is the ramp's value at its position
+    // and its bulk_modulus E / (3 (1 - 2 nu)) (an identity independent of the lambda + 2 mu / 3 the writer uses); the water's
+    // parameters are its set's, and a liquid has no Young's modulus. Tolerance: E and nu come back from mu and lambda
+    // stored as floats (a relative 6e-8 each), so 1e-5 relative holds them with margin. The VDB frame carries the
+    // same numbers as the PLY, point by point.
+    const std::string dir = tempDir("field-attributes");
+    mpm::test::writeFile(
+        dir + "/scene.json",
+        R"({"simulation": {"frames": 1, "dx": 0.02, "gravity": [0, 0, 0]}, "output": {"surface": false, "ply": true,
+        "attributes": ["youngs_modulus", "poisson_ratio", "density", "bulk_modulus", "yield_stress"]},
+        "sets": [{"material": "jelly", "sampling": "lattice", "material_params": {"density": 1000, "youngs_modulus": 2e5, "poisson_ratio": 0.3},
+                  "shape": {"type": "box", "min": [0, 0.05, 0], "max": [0.2, 0.15, 0.1]},
+                  "material_fields": [
+                      {"param": "youngs_modulus", "source": "ramp", "from": [0, 0, 0], "to": [0.2, 0, 0], "from_value": 1e5, "to_value": 5e5},
+                      {"param": "density", "source": "ramp", "from": [0, 0, 0], "to": [0.2, 0, 0], "from_value": 500, "to_value": 1500}]},
+                 {"material": "water", "material_params": {"bulk_modulus": 2e5},
+                  "shape": {"type": "box", "min": [0.4, 0.05, 0], "max": [0.5, 0.15, 0.1]}}]})");
+    const auto run = mpm::test::runMpm({"run", dir + "/scene.json", "-o", dir + "/out"}, dir);
+    ASSERT_EQ(run.code, 0) << run.output;
+    const std::vector<std::string> names = {"youngs_modulus", "poisson_ratio", "density", "bulk_modulus", "yield_stress", "id"};
+    const PointCloudData ply = readPlyPoints(dir + "/out/scene_0001.ply", {"material", "id", "youngs_modulus", "poisson_ratio",
+                                                                           "density", "bulk_modulus", "yield_stress"});
+    ASSERT_GT(ply.x.size(), 100u);
+    std::map<int, std::vector<float>> byId;
+    std::size_t jellies = 0;
+    for (std::size_t i = 0; i < ply.x.size(); ++i) {
+        const auto& c = ply.columns;
+        const float E = c[2][i], nu = c[3][i], rho = c[4][i], K = c[5][i], yield = c[6][i];
+        byId[int(c[1][i])] = {E, nu, rho, K, yield};
+        EXPECT_EQ(yield, 0.0f);
+        if (ply.x[i][0] < 0.3) {  // the jelly block, 0 to 0.2 m along x; the water 0.4 to 0.5
+            ++jellies;
+            const double t = ply.x[i][0] / 0.2;
+            EXPECT_NEAR(E / (1e5 + 4e5 * t), 1.0, 1e-5) << i;
+            EXPECT_NEAR(nu, 0.3, 1e-5) << i;
+            EXPECT_NEAR(rho / (500.0 + 1000.0 * t), 1.0, 1e-5) << i;
+            EXPECT_NEAR(K / (E / (3.0 * (1.0 - 2.0 * nu))), 1.0, 1e-5) << i;
+        } else {  // water
+            EXPECT_EQ(E, 0.0f);
+            EXPECT_EQ(nu, 0.0f);
+            EXPECT_EQ(rho, 1000.0f);
+            EXPECT_EQ(K, 2e5f);
+        }
+    }
+    EXPECT_GT(jellies, 0u);
+    EXPECT_LT(jellies, ply.x.size());
+    const PointsReadBack vdb = readVdbPoints(dir + "/out/scene_0001.vdb");
+    ASSERT_EQ(vdb.id.size(), ply.x.size());
+    ASSERT_EQ(vdb.parameters.size(), 5u);
+    for (const auto& [name, values] : vdb.parameters) {
+        const std::size_t k = std::size_t(std::find(names.begin(), names.end(), name) - names.begin());
+        ASSERT_LT(k, 5u) << name;
+        for (std::size_t i = 0; i < vdb.id.size(); ++i) ASSERT_EQ(values[i], byId.at(vdb.id[i])[k]) << name;
     }
 }

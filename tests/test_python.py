@@ -43,7 +43,8 @@ class SimulationTest(unittest.TestCase):
         self.assertEqual(p["P"].shape, (n, 3))
         self.assertEqual(p["v"].dtype, np.float32)
         self.assertEqual(p["F"].shape, (n, 3, 3))
-        for key in ("id", "material", "set", "pscale", "Cd", "J", "Jp", "stress_norm", "plastic_strain"):
+        for key in ("id", "material", "set", "pscale", "Cd", "J", "Jp", "stress_norm", "plastic_strain", "density",
+                    "youngs_modulus", "poisson_ratio", "bulk_modulus", "viscosity", "yield_stress"):
             self.assertEqual(len(p[key]), n, key)
         # At rest: F = I, J = 1, no stress; ids 0..n-1; the sets' names.
         np.testing.assert_allclose(p["F"], np.broadcast_to(np.eye(3, dtype=np.float32), (n, 3, 3)))
@@ -51,6 +52,13 @@ class SimulationTest(unittest.TestCase):
         self.assertEqual(sim.set_names, ["ball", "drop"])
         self.assertEqual(float(np.abs(p["stress_norm"]).max()), 0.0)
         self.assertEqual(float(np.abs(p["plastic_strain"]).max()), 0.0)
+        # The sets' parameters: jelly's defaults (400 kg/m^3, E 1.4e5 Pa back from its float Lame parameters), water's
+        # 1000 kg/m^3 and no Young's modulus.
+        ball, drop = p["set"] == 0, p["set"] == 1
+        np.testing.assert_array_equal(p["density"][ball], 400.0)
+        np.testing.assert_allclose(p["youngs_modulus"][ball], 1.4e5, rtol=1e-5)
+        np.testing.assert_array_equal(p["density"][drop], 1000.0)
+        np.testing.assert_array_equal(p["youngs_modulus"][drop], 0.0)
 
     def test_a_velocity_set_from_python_carries_the_bodies_as_momentum_says(self):
         # No gravity, no collider: bodies given one velocity move rigidly by v t, and momentum is M v throughout.

@@ -8,7 +8,8 @@
   material's;
 - the particles: when the run wrote PLY frames ("output": {"ply": true}; Blender cannot read VDB points), one
   point-cloud mesh `mpm_particles` carrying every point attribute of the file: `velocity` (vx, vy, vz), `id`,
-  `material`, `set`, `pscale`, `Cd` (a colour attribute) and J, Jp, stress_norm, F when written. Either stored in
+  `material`, `set`, `pscale`, `Cd` (a colour attribute) and J, Jp, stress_norm, plastic_strain, F and the
+  material parameters (density, youngs_modulus, ...) when written. Either stored in
   the .blend (embed: a mesh per frame, shown in turn by a geometry-node modifier; plays without scripts) or
   reloaded from <scene>_NNNN.ply at each frame change by a text block registered as a module (stream: plays when
   the file's scripts are allowed to run); auto embeds up to EMBED_LIMIT particles over all frames;
@@ -90,7 +91,8 @@ def fill_mesh(mesh, v):
     for name in ("id", "material", "set"):
         if name in fields:
             attribute(name, "INT", v[name].astype(np.int32))
-    for name in ("pscale", "J", "Jp", "stress_norm"):
+    for name in ("pscale", "J", "Jp", "stress_norm", "plastic_strain", "density", "youngs_modulus", "poisson_ratio",
+                 "bulk_modulus", "viscosity", "yield_stress"):
         if name in fields:
             attribute(name, "FLOAT", v[name].astype(np.float32))
     if "red" in fields:
