@@ -79,24 +79,27 @@ struct Species {
     std::size_t size() const { return p.size(); }
 };
 
-/// tau of particles first .. first + n - 1 (n <= simd::kLanes) of a species. Particles with parameters of their
-/// own go one at a time through the same batched code, so that a field equal everywhere gives the same bits. One
-/// call site for both: a second one changes how GCC inlines the models' batches, and with that where it contracts
-/// multiply-adds, which moved the bits of species without fields.
+/// The parameters of particles first .. first + kLanes - 1 of a species, lane by lane.
+template <class M>
+LaneParams<typename M::Params> lanesFrom(const Species<M>& sp, std::size_t first) {
+    return sp.perParticle ? LaneParams<typename M::Params>(sp.params, &sp.local[first])
+                          : LaneParams<typename M::Params>(sp.params);
+}
+
+/// tau of particles first .. first + n - 1 (n <= simd::kLanes) of a species, in one batch whether the particles
+/// share the species' parameters or have their own: a lane computes the same bits either way, so a field equal
+/// everywhere changes none. One call site for both: a second one changes how GCC inlines the models' batches, and
+/// with that where it contracts multiply-adds, which moved the bits of species without fields.
 template <class M>
 void kirchhoffOfRange(const Species<M>& sp, std::size_t first, int n, Mat3f* tau) {
-    const int batch = sp.perParticle ? 1 : n;
-    for (int k = 0; k < n; k += batch)
-        kirchhoffOfRange<M>(sp.paramsOf(first + std::size_t(k)), sp.state, first + std::size_t(k), batch, tau + k);
+    kirchhoffOfRange<M>(lanesFrom(sp, first), sp.state, first, n, tau);
 }
 
 /// The deformation update and return map of particles first .. first + n - 1 (n <= simd::kLanes) of a species,
 /// the same way.
 template <class M>
 void updateDeformationOfRange(Species<M>& sp, std::size_t first, int n, const Mat3f* gradV, float dt) {
-    const int batch = sp.perParticle ? 1 : n;
-    for (int k = 0; k < n; k += batch)
-        updateDeformationOfRange<M>(sp.paramsOf(first + std::size_t(k)), sp.state, first + std::size_t(k), batch, gradV + k, dt);
+    updateDeformationOfRange<M>(lanesFrom(sp, first), sp.state, first, n, gradV, dt);
 }
 
 /// The closed set of species types, one per material in materials/Materials.h, and of their parameters.

@@ -50,10 +50,10 @@ struct FixedCorotated {
 
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.F[i]); }
     /// kirchhoff for particles first .. first + n - 1 (n <= simd::kLanes), their SVDs in SIMD lanes.
-    static void kirchhoffBatch(const Params& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+    static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
         Svd3<float> d[simd::kLanes];
         svd3Batch(&s.F[first], n, d);
-        for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m.mu, m.lambda, s.F[first + k], d[k]);
+        for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m[k].mu, m[k].lambda, s.F[first + k], d[k]);
     }
     static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
         s.update(i, gradV, dt);

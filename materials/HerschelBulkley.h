@@ -142,10 +142,10 @@ struct HerschelBulkley {
     static float pressure(const Params& m, float J) { return m.bulkModulus * (Water::powNegative(J, m.gamma) - 1.0f); }
 
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf(m, svd3<float>(s.Fe[i])); }
-    static void kirchhoffBatch(const Params& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+    static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
         Svd3<float> d[simd::kLanes];
         svd3Batch(&s.Fe[first], n, d);
-        for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf(m, d[k]);
+        for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf(m[k], d[k]);
     }
 
     /// Elastic predictor F_E trial = (I + dt grad v) F_E, then the flow over dt on its SVD.
@@ -159,13 +159,14 @@ struct HerschelBulkley {
     static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
         returnMap(m, s, i, svd3<float>((Mat3f::Identity() + dt * gradV) * s.Fe[i]), dt);
     }
-    static void updateDeformationBatch(const Params& m, State& s, std::size_t first, int n, const Mat3f* gradV, float dt) {
+    static void updateDeformationBatch(const LaneParams<Params>& m, State& s, std::size_t first, int n, const Mat3f* gradV,
+                                       float dt) {
         Mat3f trial[simd::kLanes];
         for (int k = n; k < simd::kLanes; ++k) trial[k].setIdentity();  // unread, but GCC cannot see that
         for (int k = 0; k < n; ++k) trial[k] = (Mat3f::Identity() + dt * gradV[k]) * s.Fe[first + k];
         Svd3<float> d[simd::kLanes];
         svd3Batch(trial, n, d);
-        for (int k = 0; k < n; ++k) returnMap(m, s, first + k, d[k], dt);
+        for (int k = 0; k < n; ++k) returnMap(m[k], s, first + k, d[k], dt);
     }
 
     /// G |dev eps|^2 plus the equation of state's energy (Water::energyDensity's formula) at J = det F_E.

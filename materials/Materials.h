@@ -22,8 +22,10 @@
 //     static float  plasticVolumeRatio(const State&, size_t i);                     // Jp, volume change from plasticity
 //     static float  plasticStrain(const State&, size_t i);                          // equivalent plastic strain
 //     // optional, for n <= simd::kLanes consecutive particles (the SVD-based models run their SVDs in SIMD lanes):
-//     static void   kirchhoffBatch(const Params&, const State&, size_t first, int n, Mat3f* tau);
-//     static void   updateDeformationBatch(const Params&, State&, size_t first, int n, const Mat3f* gradV, float dt);
+//     // (lane k's parameters m[k]: one set for all, or each particle's; materials/SvdBatch.h, LaneParams):
+//     static void   kirchhoffBatch(const LaneParams<Params>& m, const State&, size_t first, int n, Mat3f* tau);
+//     static void   updateDeformationBatch(const LaneParams<Params>& m, State&, size_t first, int n, const Mat3f* gradV,
+//                                          float dt);
 // };
 // @endcode
 // A new model is a new header and one entry in AllMaterials. A build may append models of its own without
@@ -129,23 +131,24 @@ void forEachMaterial(MaterialList<Ms...>, F&& f) {
     (f.template operator()<Ms>(), ...);
 }
 
-/// tau of particles first .. first + n - 1 (n <= simd::kLanes): batched where the model has it.
+/// tau of particles first .. first + n - 1 (n <= simd::kLanes), lane k with parameters m[k]: batched where the
+/// model has it.
 template <class M>
-void kirchhoffOfRange(const typename M::Params& m, const typename M::State& s, std::size_t first, int n, Mat3f* tau) {
+void kirchhoffOfRange(const LaneParams<typename M::Params>& m, const typename M::State& s, std::size_t first, int n, Mat3f* tau) {
     if constexpr (requires { M::kirchhoffBatch(m, s, first, n, tau); })
         M::kirchhoffBatch(m, s, first, n, tau);
     else
-        for (int k = 0; k < n; ++k) tau[k] = M::kirchhoff(m, s, first + std::size_t(k));
+        for (int k = 0; k < n; ++k) tau[k] = M::kirchhoff(m[k], s, first + std::size_t(k));
 }
 
-/// updateDeformation of particles first .. first + n - 1 (n <= simd::kLanes): batched where the model has it.
+/// updateDeformation of particles first .. first + n - 1 (n <= simd::kLanes), the same way.
 template <class M>
-void updateDeformationOfRange(const typename M::Params& m, typename M::State& s, std::size_t first, int n, const Mat3f* gradV,
-                              float dt) {
+void updateDeformationOfRange(const LaneParams<typename M::Params>& m, typename M::State& s, std::size_t first, int n,
+                              const Mat3f* gradV, float dt) {
     if constexpr (requires { M::updateDeformationBatch(m, s, first, n, gradV, dt); })
         M::updateDeformationBatch(m, s, first, n, gradV, dt);
     else
-        for (int k = 0; k < n; ++k) M::updateDeformation(m, s, first + std::size_t(k), gradV[k], dt);
+        for (int k = 0; k < n; ++k) M::updateDeformation(m[k], s, first + std::size_t(k), gradV[k], dt);
 }
 
 }  // namespace mpm

@@ -188,17 +188,18 @@ struct Sand {
 
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.Fe[i]); }
     /// kirchhoff for n <= simd::kLanes particles from first, their SVDs in SIMD lanes.
-    static void kirchhoffBatch(const Params& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+    static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
         Svd3<float> d[simd::kLanes];
         svd3Batch(&s.Fe[first], n, d);
-        for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m.mu, m.lambda, d[k]);
+        for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m[k].mu, m[k].lambda, d[k]);
     }
 
     /// Elastic predictor F_E trial = (I + dt grad v) F_E, then the return map.
     static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
         predictAndReturnMap<Sand>(m, s, i, gradV, dt);
     }
-    static void updateDeformationBatch(const Params& m, State& s, std::size_t first, int n, const Mat3f* gradV, float dt) {
+    static void updateDeformationBatch(const LaneParams<Params>& m, State& s, std::size_t first, int n, const Mat3f* gradV,
+                                       float dt) {
         predictAndReturnMapBatch<Sand>(m, s, first, n, gradV, dt);
     }
     /// Project eps = ln Sigma of the trial F_E = U Sigma V^T (plus the volume correction) and harden.

@@ -63,12 +63,12 @@ struct Snow {
         return FixedCorotated::kirchhoffOf<float>(m.mu * h, m.lambda * h, s.Fe[i]);
     }
     /// kirchhoff for n <= simd::kLanes particles from first, their SVDs in SIMD lanes.
-    static void kirchhoffBatch(const Params& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+    static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
         Svd3<float> d[simd::kLanes];
         svd3Batch(&s.Fe[first], n, d);
         for (int k = 0; k < n; ++k) {
-            const float h = hardening(m, s.Jp[first + k]);
-            tau[k] = FixedCorotated::kirchhoffOf<float>(m.mu * h, m.lambda * h, s.Fe[first + k], d[k]);
+            const float h = hardening(m[k], s.Jp[first + k]);
+            tau[k] = FixedCorotated::kirchhoffOf<float>(m[k].mu * h, m[k].lambda * h, s.Fe[first + k], d[k]);
         }
     }
 
@@ -76,7 +76,8 @@ struct Snow {
     static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
         predictAndReturnMap<Snow>(m, s, i, gradV, dt);
     }
-    static void updateDeformationBatch(const Params& m, State& s, std::size_t first, int n, const Mat3f* gradV, float dt) {
+    static void updateDeformationBatch(const LaneParams<Params>& m, State& s, std::size_t first, int n, const Mat3f* gradV,
+                                       float dt) {
         predictAndReturnMapBatch<Snow>(m, s, first, n, gradV, dt);
     }
     /// Clamp sigma of the trial F_E = U Sigma V^T, and push the clamped-away volume into J_P.

@@ -106,6 +106,18 @@ inline void givensZero8(Columns8& B, Columns8& U, int j, int i, int k) {
 
 }  // namespace svd_detail
 
+/// The parameters of a batch's lanes: one set for every lane (a species' own), or lane k's at each[k] (particles
+/// with parameters of their own, a set's material_fields). The SVDs, most of a batch's work, need none, so both
+/// kinds of species run them in SIMD lanes.
+template <class Params>
+struct LaneParams {
+    const Params* shared;
+    const Params* each = nullptr;
+    LaneParams(const Params& all) : shared(&all) {}  // NOLINT(google-explicit-constructor): one set is the usual case
+    LaneParams(const Params& fallback, const Params* perLane) : shared(&fallback), each(perLane) {}
+    const Params& operator[](int k) const { return each ? each[k] : *shared; }
+};
+
 /// The SVDs of F[0..n), n <= simd::kLanes, into out[0..n); the same convention as svd3.
 inline void svd3Batch(const Mat3f* F, int n, Svd3<float>* out) {
     using namespace svd_detail;
@@ -156,14 +168,14 @@ void predictAndReturnMap(const typename M::Params& m, typename M::State& s, std:
 
 /// ... and particles first .. first + n - 1 (n <= simd::kLanes), their SVDs in SIMD lanes.
 template <class M>
-void predictAndReturnMapBatch(const typename M::Params& m, typename M::State& s, std::size_t first, int n, const Mat3f* gradV,
-                              float dt) {
+void predictAndReturnMapBatch(const LaneParams<typename M::Params>& m, typename M::State& s, std::size_t first, int n,
+                              const Mat3f* gradV, float dt) {
     Mat3f trial[simd::kLanes];
     for (int k = n; k < simd::kLanes; ++k) trial[k].setIdentity();  // unread, but GCC cannot see that
     for (int k = 0; k < n; ++k) trial[k] = (Mat3f::Identity() + dt * gradV[k]) * s.Fe[first + k];
     Svd3<float> d[simd::kLanes];
     svd3Batch(trial, n, d);
-    for (int k = 0; k < n; ++k) M::returnMap(m, s, first + k, d[k]);
+    for (int k = 0; k < n; ++k) M::returnMap(m[k], s, first + k, d[k]);
 }
 
 }  // namespace mpm

@@ -100,17 +100,18 @@ struct VonMises {
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
         return henckyTau(m.mu, m.lambda, svd3<float>(s.Fe[i]));
     }
-    static void kirchhoffBatch(const Params& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+    static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
         Svd3<float> d[simd::kLanes];
         svd3Batch(&s.Fe[first], n, d);
-        for (int k = 0; k < n; ++k) tau[k] = henckyTau(m.mu, m.lambda, d[k]);
+        for (int k = 0; k < n; ++k) tau[k] = henckyTau(m[k].mu, m[k].lambda, d[k]);
     }
 
     /// Elastic predictor F_E trial = (I + dt grad v) F_E, then the return map.
     static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
         predictAndReturnMap<VonMises>(m, s, i, gradV, dt);
     }
-    static void updateDeformationBatch(const Params& m, State& s, std::size_t first, int n, const Mat3f* gradV, float dt) {
+    static void updateDeformationBatch(const LaneParams<Params>& m, State& s, std::size_t first, int n, const Mat3f* gradV,
+                                       float dt) {
         predictAndReturnMapBatch<VonMises>(m, s, first, n, gradV, dt);
     }
     static void returnMap(const Params& m, State& s, std::size_t i, const Svd3<float>& d) {
