@@ -29,13 +29,12 @@ PointAttributes PointAttributes::of(const std::vector<std::string>& requested) {
 
 namespace {
 
-/// Material parameter `name` (PointAttributes::parameterNames) of a parameter set, in SI units, read from what
+/// Material parameter `name` (PointAttributes::parameterNames, but density) of a parameter set, in SI units, read from what
 /// the model keeps: Young's modulus and Poisson's ratio back from mu and lambda (E = mu (3 lambda + 2 mu) /
 /// (lambda + mu), nu = lambda / (2 (lambda + mu))), and 0 where the model has no such parameter.
 template <class Params>
 float parameterValue(const Params& m, const std::string& name) {
     constexpr bool kLame = requires { m.mu + m.lambda; };
-    if (name == "density") return m.density;
     if constexpr (kLame) {
         const double mu = m.mu, lambda = m.lambda;
         if (name == "youngs_modulus") return float(mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu));
@@ -83,6 +82,11 @@ void appendMaterialAttributes(const Sp& sp, const PointAttributes& a, PointCloud
     }
     for (std::size_t k = 0; k < a.parameters.size(); ++k) {
         std::vector<float>& column = f.parameters[k].second;
+        if (a.parameters[k] == "density") {
+            // The particle's own: its mass over its rest volume (a point cloud's masses and mass_scale included).
+            for (std::size_t i = 0; i < n; ++i) column.push_back(sp.p.mass[i] / sp.p.volume0[i]);
+            continue;
+        }
         if (!sp.perParticle) {
             column.insert(column.end(), n, parameterValue(sp.params, a.parameters[k]));
             continue;

@@ -23,10 +23,10 @@ struct PointAttributes {
     /// material_fields) or its set's, after the set's Lame scales.
     std::vector<std::string> parameters;
 
-    /// The material parameters a frame can carry per particle, named as the materials' scene keys: density
-    /// (rest, kg/m^3), youngs_modulus and poisson_ratio (from a solid's Lame parameters; 0 for a liquid),
-    /// bulk_modulus (a liquid's k, a solid's lambda + 2 mu / 3; Pa), viscosity (Pa s^n) and yield_stress (Pa;
-    /// 0 for a model without them).
+    /// The material parameters a frame can carry per particle, named as the materials' scene keys: density (its
+    /// mass over its rest volume, kg/m^3), youngs_modulus and poisson_ratio (from a solid's Lame parameters; 0 for a
+    /// liquid), bulk_modulus (a liquid's k, a solid's lambda + 2 mu / 3; Pa), viscosity (Pa s^n) and yield_stress
+    /// (Pa; 0 for a model without them): the values given, not what hardening or softening made of them.
     static const std::vector<std::string>& parameterNames() {
         static const std::vector<std::string> n = {"density",      "youngs_modulus", "poisson_ratio",
                                                    "bulk_modulus", "viscosity",      "yield_stress"};

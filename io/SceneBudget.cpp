@@ -36,10 +36,10 @@ std::string gib(double bytes) {
 }
 
 /// The fields a budget holds, to follow a particle count: " and X of collider distance fields", ", X of collider
-/// distance fields and Y of the sets' distance fields", or nothing.
+/// distance fields and Y of a set's distance field", or nothing.
 std::string fieldsInWords(const SceneBudget& b) {
     const std::string colliders = gib(b.colliderBytes) + " of collider distance fields",
-                      sets = gib(b.setFieldBytes) + " of the sets' distance fields";
+                      sets = gib(b.setFieldBytes) + " of a set's distance field";
     if (b.colliderBytes > 0.0 && b.setFieldBytes > 0.0) return ", " + colliders + " and " + sets;
     if (b.colliderBytes > 0.0) return " and " + colliders;
     if (b.setFieldBytes > 0.0) return " and " + sets;
@@ -292,9 +292,10 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
     }
     // Every rank holds every collider's field whole.
     for (std::size_t i = 0; i < scene.colliders.size(); ++i) b.colliderBytes += colliderFieldBytes(ColliderEntry(scene, i));
-    // The sets' fields live while the scene is built, beside the particles sampled so far: the overlap test holds
-    // every set's region at once. Counted as if they lived on with the colliders', an upper bound.
-    for (std::size_t i = 0; i < scene.sets.size(); ++i) b.setFieldBytes += setFieldBytes(SetEntry(scene, i));
+    // A set's field lives while the set is sampled (and tested for overlaps), one set at a time, beside the
+    // particles sampled so far: the largest counts, as if it lived on with the colliders', an upper bound.
+    for (std::size_t i = 0; i < scene.sets.size(); ++i)
+        b.setFieldBytes = std::max(b.setFieldBytes, setFieldBytes(SetEntry(scene, i)));
     b.memoryBytes += b.colliderBytes + b.setFieldBytes;
     const MemoryLimit limit = memoryLimit();
     b.machineBytes = limit.bytes;

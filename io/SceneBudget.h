@@ -24,7 +24,7 @@ struct SceneBudget {
     double peakParticles = 0.0;                      ///< once every emission is done
     double memoryBytes = 0.0;                        ///< peak, estimated, the colliders' and sets' fields included
     double colliderBytes = 0.0;                      ///< the distance fields of the colliders read from files
-    double setFieldBytes = 0.0;                      ///< the sets' read from files, all held while overlaps are tested
+    double setFieldBytes = 0.0;                      ///< the largest of a set read from a file (one is held at a time)
     double machineBytes = 0.0;                       ///< the memory this process may use (io/SceneBudget.h, memoryLimit)
     std::string machineHolder = "this machine has";  ///< what sets it, in words
     double substepsPerFrame = 0.0;                   ///< at the start

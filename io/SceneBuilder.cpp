@@ -53,8 +53,10 @@ bool resolves(double voxel, double wall) {
 /// A mesh file's triangles and the voxel of its distance field.
 struct MeshField {
     TriangleMesh mesh;
-    double voxel = 0.0;
-    WallThickness wall;  ///< the thinnest wall below two default voxels (a collider's; sets are not measured)
+    double voxel = 0.0;   ///< in the mesh's coordinates
+    WallThickness wall;   ///< the thinnest wall below two default voxels (a collider's; sets are not measured)
+    bool placed = true;   ///< in the scene's coordinates (a collider); else a set's, in its file's
+    double metres = 1.0;  ///< per unit of the mesh's coordinates: 1 placed, a set's scale in its file's
 };
 
 /// A mesh shape's triangles (placed by its transform for a collider, `place`; in the file's own coordinates for a
@@ -70,7 +72,10 @@ MeshField meshField(const SceneDesc& scene, const std::string& where, const Mesh
     } catch (const LevelSetError& e) {
         throw SceneError(scene.file + ": " + where + "/file: " + e.what());
     }
-    f.voxel = m.voxelSize > 0.0 ? m.voxelSize : coarse;
+    // voxel_size is in metres, as every length a scene gives.
+    f.placed = place;
+    f.metres = place ? 1.0 : m.transform.scale;
+    f.voxel = m.voxelSize > 0.0 ? m.voxelSize / f.metres : coarse;
     if (!place) return f;
     // A shell is twice its half-thickness thick everywhere; a solid is measured.
     f.wall = m.thickness > 0.0 ? WallThickness{2.0 * m.thickness, Vec3d::Zero(), -1}
@@ -122,13 +127,16 @@ MeshBand meshBand(double dx, double voxel) {
 void refuseFieldTooLarge(const SceneDesc& scene, const std::string& where, const MeshShape& m, const MeshField& f, double band) {
     const std::string at = scene.file + ": " + where + "/file: " + m.file;
     for (std::size_t i = 0; i < f.mesh.points.size(); ++i) {
-        const Vec3d& p = f.mesh.points[i];
-        if (!(p.cwiseAbs().maxCoeff() < kMaxGridCoordinate * f.voxel)) {
+        if (!(f.mesh.points[i].cwiseAbs().maxCoeff() < kMaxGridCoordinate * f.voxel)) {
+            // In metres: a set's field is built in its file's coordinates, scaled but not yet turned or moved.
+            const Vec3d p = f.metres * f.mesh.points[i];
+            const double voxel = f.metres * f.voxel;
             std::ostringstream e;
             e.precision(3);
-            e << at << ": a vertex lies at (" << p[0] << ", " << p[1] << ", " << p[2] << ") m once placed (transform.scale "
-              << m.transform.scale << "), beyond the distance field's range of +-2^30 voxels (" << kMaxGridCoordinate * f.voxel
-              << " m at its voxel of " << f.voxel << " m); check the mesh's units and the collider's transform";
+            e << at << ": a vertex lies at (" << p[0] << ", " << p[1] << ", " << p[2] << ") m once "
+              << (f.placed ? "placed" : "scaled") << " (transform.scale " << m.transform.scale
+              << "), beyond the distance field's range of +-2^30 voxels (" << kMaxGridCoordinate * voxel << " m at its voxel of "
+              << voxel << " m); check the mesh's units and the shape's transform";
             throw SceneError(e.str());
         }
     }
@@ -139,8 +147,8 @@ void refuseFieldTooLarge(const SceneDesc& scene, const std::string& where, const
     if (bytes > std::min(machine, mappable)) {
         std::ostringstream e;
         e.precision(3);
-        e << at << ": its distance field would take about " << bytes / double(1u << 30) << " GiB (a surface of " << f.mesh.area()
-          << " m^2 at a voxel of " << f.voxel << " m), and ";
+        e << at << ": its distance field would take about " << bytes / double(1u << 30) << " GiB (a surface of "
+          << f.mesh.area() * f.metres * f.metres << " m^2 at a voxel of " << f.voxel * f.metres << " m), and ";
         if (mappable < machine)
             e << "this process may map " << mappable / double(1u << 30) << " GiB more (its address-space limit, ulimit -v)";
         else
@@ -750,42 +758,47 @@ std::vector<long long> countInside(const SetEntry& set, const std::vector<Vec3d>
 
 /// Each set's word on the other sets emitted at the same time into the same space: one line per set, naming the
 /// first few it overlaps. Only pairs whose boxes meet are tested, so hundreds of sets answer in a blink (every
-/// pair tested, 300 overlapping sets took 17 s and printed 14 MB).
+/// pair tested, 300 overlapping sets took 17 s and printed 14 MB), and a set's region is built only when another
+/// set's box meets it, one at a time: a mesh set's distance field lives while it is tested, as when it is sampled.
 void overlapWarnings(const SceneDesc& scene, const std::vector<std::vector<Vec3d>>& positions, std::vector<std::string>& out) {
     constexpr std::size_t kNamedOverlaps = 3;
     const std::size_t n = scene.sets.size();
     std::vector<Eigen::AlignedBox3d> box(n);
     for (std::size_t i = 0; i < n; ++i)
         for (const Vec3d& x : positions[i]) box[i].extend(x);
-    // A set given as points has no region to be inside of.
-    std::vector<std::optional<SetRegionIn>> regions(n);
-    for (std::size_t a = 0; a < n; ++a)
-        if (!positions[a].empty() && !std::holds_alternative<PointsShape>(scene.sets[a].shape))
-            regions[a] = regionOf(SetEntry(scene, a));
-    for (std::size_t b = 0; b < n; ++b) {
-        if (positions[b].empty()) continue;
-        std::ostringstream named;
-        std::size_t overlaps = 0;
-        for (std::size_t a = 0; a < n; ++a) {
-            if (a == b || !regions[a] || scene.sets[a].startFrame != scene.sets[b].startFrame) continue;
-            // a's region reaches about half a particle spacing past its particles: a cell of margin covers it.
-            Eigen::AlignedBox3d reach = box[a];
-            reach.min().array() -= scene.settings.dx;
-            reach.max().array() += scene.settings.dx;
+    // inside[b]: the sets a whose region holds a noticeable share of b's particles, with how many, in order of a.
+    std::vector<std::vector<std::pair<std::size_t, std::size_t>>> inside(n);
+    for (std::size_t a = 0; a < n; ++a) {
+        // A set given as points has no region to be inside of.
+        if (positions[a].empty() || std::holds_alternative<PointsShape>(scene.sets[a].shape)) continue;
+        // a's region reaches about half a particle spacing past its particles: a cell of margin covers it.
+        Eigen::AlignedBox3d reach = box[a];
+        reach.min().array() -= scene.settings.dx;
+        reach.max().array() += scene.settings.dx;
+        std::optional<SetRegionIn> region;
+        for (std::size_t b = 0; b < n; ++b) {
+            if (a == b || positions[b].empty() || scene.sets[a].startFrame != scene.sets[b].startFrame) continue;
             if (!reach.intersects(box[b])) continue;
-            const Placement& t = regions[a]->placement;
-            std::size_t inside = 0;
+            if (!region) region = regionOf(SetEntry(scene, a));
+            const Placement& t = region->placement;
+            std::size_t count = 0;
             for (const Vec3d& x : positions[b]) {
                 // Back into the frame a's region was sampled in.
                 const Vec3d local = t.identity() ? x : Vec3d(t.rotate.matrix().transpose() * (x - t.translate) / t.scale);
-                inside += std::visit([&](const auto& r) { return r.contains(local); }, regions[a]->region);
+                count += std::visit([&](const auto& r) { return r.contains(local); }, region->region);
             }
-            if (double(inside) <= kNoticeableShare * double(positions[b].size())) continue;
-            if (overlaps++ < kNamedOverlaps)
-                named << (overlaps > 1 ? "; " : "") << inside << " of " << positions[b].size() << " particles lie inside set "
-                      << a << " (\"" << scene.sets[a].name << "\")";
+            if (double(count) > kNoticeableShare * double(positions[b].size())) inside[b].emplace_back(a, count);
         }
-        if (overlaps == 0) continue;
+    }
+    for (std::size_t b = 0; b < n; ++b) {
+        if (inside[b].empty()) continue;
+        std::ostringstream named;
+        for (std::size_t k = 0; k < std::min(kNamedOverlaps, inside[b].size()); ++k) {
+            const auto [a, count] = inside[b][k];
+            named << (k > 0 ? "; " : "") << count << " of " << positions[b].size() << " particles lie inside set " << a << " (\""
+                  << scene.sets[a].name << "\")";
+        }
+        const std::size_t overlaps = inside[b].size();
         out.push_back(SetEntry(scene, b).at("shape") + ": " + named.str() +
                       (overlaps > kNamedOverlaps ? "; and inside " + std::to_string(overlaps - kNamedOverlaps) + " more sets"
                                                  : std::string()) +

@@ -264,9 +264,10 @@ void outputKeys(V& v, OutputDesc& o) {
                 "point attributes written beside P, v, id, material, set, pscale and Cd: J (volume ratio), Jp "
                 "(plastic volume ratio), stress_norm (Cauchy stress, Frobenius norm, Pa), F (elastic deformation "
                 "gradient, 3x3), plastic_strain (equivalent plastic strain of metal, the accumulated flow of a viscous liquid); "
-                "and each particle's material parameters, its own where material_fields give them: density (kg/m^3), "
-                "youngs_modulus and poisson_ratio (of a solid, 0 for a liquid), bulk_modulus (a liquid's k, a solid's "
-                "lambda + 2 mu / 3), viscosity and yield_stress (0 for a model without them), after lambda_scale and mu_scale",
+                "and each particle's material parameters, its own where material_fields give them: density (its mass over "
+                "its rest volume, kg/m^3), youngs_modulus and poisson_ratio (of a solid, 0 for a liquid), bulk_modulus (a "
+                "liquid's k, a solid's lambda + 2 mu / 3), viscosity and yield_stress (0 for a model without them), after "
+                "lambda_scale and mu_scale; the values given, not what hardening made of them",
             .noun = "point attribute"},
         o.attributes, PointAttributes::names());
     v.choice(

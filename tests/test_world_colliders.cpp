@@ -370,6 +370,7 @@ TEST(SetBudget, TheEstimateOfASetsFieldBoundsTheFieldBuiltAndCountsInTheMemory) 
                               shape + R"(}], "colliders": [)" + colliders + "]}",
                           dir + "/scene.json");
     };
+    std::vector<double> estimates;
     for (const std::string mesh : {"ball.obj", "cup.obj"}) {
         const std::string shape = R"({"type": "mesh", "file": ")" + mesh + R"("})";
         const SceneDesc scene = sceneWith(shape, dx, "");
@@ -386,6 +387,10 @@ TEST(SetBudget, TheEstimateOfASetsFieldBoundsTheFieldBuiltAndCountsInTheMemory) 
         EXPECT_GE(built, estimate / 6.0) << mesh;
         const std::string scaled = R"({"type": "mesh", "file": ")" + mesh + R"(", "transform": {"scale": 3}})";
         EXPECT_NEAR(setFieldBytes(SetEntry(sceneWith(scaled, 3 * dx, ""), 0)), estimate, 1e-9 * estimate) << mesh;
+        // voxel_size is in metres for a set too: the default's dx / 2 given explicitly builds the default's field (it
+        // was taken in the file's units, 1 / scale^2 the memory: a new user's trial).
+        const std::string given = R"({"type": "mesh", "file": ")" + mesh + R"(", "voxel_size": 0.03, "transform": {"scale": 3}})";
+        EXPECT_NEAR(setFieldBytes(SetEntry(sceneWith(given, 3 * dx, ""), 0)), estimate, 1e-9 * estimate) << mesh;
         // The budget holds it beside the particles and names it.
         const SceneBudget budget = estimateBudget(scene, false);
         EXPECT_EQ(budget.setFieldBytes, estimate);
@@ -393,8 +398,15 @@ TEST(SetBudget, TheEstimateOfASetsFieldBoundsTheFieldBuiltAndCountsInTheMemory) 
             estimateBudget(sceneWith(R"({"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]})", dx, ""), false);
         EXPECT_EQ(boxOnly.setFieldBytes, 0.0);
         EXPECT_GE(budget.memoryBytes, estimate);
-        EXPECT_NE(describeBudget(budget).find("of the sets' distance fields"), std::string::npos) << describeBudget(budget);
+        EXPECT_NE(describeBudget(budget).find("of a set's distance field"), std::string::npos) << describeBudget(budget);
+        estimates.push_back(estimate);
     }
+    // Sets are sampled, and tested for overlaps, one at a time: two count as the larger of their fields.
+    const SceneDesc both = parseScene(R"({"simulation": {"dx": 0.02, "frames": 1}, "sets": [
+        {"material": "water", "shape": {"type": "mesh", "file": "ball.obj"}},
+        {"material": "water", "shape": {"type": "mesh", "file": "cup.obj", "transform": {"translate": [1, 0, 0]}}}]})",
+                                      dir + "/scene.json");
+    EXPECT_EQ(estimateBudget(both, false).setFieldBytes, std::max(estimates[0], estimates[1]));
     const std::string rock = std::string(MPM_SOURCE_DIR) + "/scenes/assets/rock.vdb";
     const double estimate = setFieldBytes(SetEntry(sceneWith(R"({"type": "vdb", "file": ")" + rock + R"("})", dx, ""), 0));
     const double built = double(vdbLevelSet(rock, "surface", colliderReach(dx))->grid().grid->memUsage());
