@@ -29,24 +29,32 @@ PointAttributes PointAttributes::of(const std::vector<std::string>& requested) {
 
 namespace {
 
-/// Material parameter `name` (PointAttributes::parameterNames, but density) of a parameter set, in SI units, read from what
-/// the model keeps: Young's modulus and Poisson's ratio back from mu and lambda (E = mu (3 lambda + 2 mu) /
-/// (lambda + mu), nu = lambda / (2 (lambda + mu))), and 0 where the model has no such parameter.
+/// The material parameters PointAttributes::parameterNames lists, in its order; density is read from the particle.
+enum class Parameter { Density, YoungsModulus, PoissonRatio, BulkModulus, Viscosity, YieldStress };
+
+Parameter parameterNamed(const std::string& name) {
+    const auto& names = PointAttributes::parameterNames();
+    return Parameter(std::find(names.begin(), names.end(), name) - names.begin());
+}
+
+/// Parameter `which` (not density) of a parameter set, in SI units, read from what the model keeps: Young's
+/// modulus and Poisson's ratio back from mu and lambda (E = mu (3 lambda + 2 mu) / (lambda + mu),
+/// nu = lambda / (2 (lambda + mu))), and 0 where the model has no such parameter.
 template <class Params>
-float parameterValue(const Params& m, const std::string& name) {
+float parameterValue(const Params& m, Parameter which) {
     constexpr bool kLame = requires { m.mu + m.lambda; };
     if constexpr (kLame) {
         const double mu = m.mu, lambda = m.lambda;
-        if (name == "youngs_modulus") return float(mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu));
-        if (name == "poisson_ratio") return float(lambda / (2.0 * (lambda + mu)));
-        if (name == "bulk_modulus") return float(lambda + 2.0 * mu / 3.0);
+        if (which == Parameter::YoungsModulus) return float(mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu));
+        if (which == Parameter::PoissonRatio) return float(lambda / (2.0 * (lambda + mu)));
+        if (which == Parameter::BulkModulus) return float(lambda + 2.0 * mu / 3.0);
     }
     if constexpr (requires { m.bulkModulus; })
-        if (name == "bulk_modulus") return m.bulkModulus;
+        if (which == Parameter::BulkModulus) return m.bulkModulus;
     if constexpr (requires { m.viscosity; })
-        if (name == "viscosity") return m.viscosity;
+        if (which == Parameter::Viscosity) return m.viscosity;
     if constexpr (requires { m.yieldStress; })
-        if (name == "yield_stress") return m.yieldStress;
+        if (which == Parameter::YieldStress) return m.yieldStress;
     return 0.0f;
 }
 
@@ -82,16 +90,17 @@ void appendMaterialAttributes(const Sp& sp, const PointAttributes& a, PointCloud
     }
     for (std::size_t k = 0; k < a.parameters.size(); ++k) {
         std::vector<float>& column = f.parameters[k].second;
-        if (a.parameters[k] == "density") {
+        const Parameter which = parameterNamed(a.parameters[k]);
+        if (which == Parameter::Density) {
             // The particle's own: its mass over its rest volume (a point cloud's masses and mass_scale included).
             for (std::size_t i = 0; i < n; ++i) column.push_back(sp.p.mass[i] / sp.p.volume0[i]);
             continue;
         }
         if (!sp.perParticle) {
-            column.insert(column.end(), n, parameterValue(sp.params, a.parameters[k]));
+            column.insert(column.end(), n, parameterValue(sp.params, which));
             continue;
         }
-        for (std::size_t i = 0; i < n; ++i) column.push_back(parameterValue(sp.paramsOf(i), a.parameters[k]));
+        for (std::size_t i = 0; i < n; ++i) column.push_back(parameterValue(sp.paramsOf(i), which));
     }
 }
 
