@@ -361,10 +361,11 @@ CaseResult damBreak(const CaseConfig& c) {
 
 // 8. Angle of repose (Klar et al. 2016): a planar sand column collapses; the flank angle fitted between
 // 10% and 80% of the pile height must lie in [phi - 3, phi + 6] degrees.
-CaseResult angleOfRepose(const CaseConfig& c, double phiDegrees) {
+CaseResult angleOfRepose(const CaseConfig& c, double phiDegrees, YieldSurface surface) {
     Setup s = load("angle_of_repose", c);
     Simulation& sim = *s.sim;
     auto& sp = only<Sand>(sim);
+    sp.params.surface = surface;
     sp.params.h0 = float(phiDegrees);  // no hardening: phi(q) = h0
     std::fill(sp.state.alpha.begin(), sp.state.alpha.end(), Sand::alphaOf(sp.params, 0.0f));
     const double dx = sim.settings().dx;
@@ -570,9 +571,13 @@ const std::vector<ValidationCase>& cases() {
         v.push_back({"dam_break", "relative RMS error of the front Z for 0.84 <= T <= 3.33 (Martin and Moyce 1952)", "< 10%", 0,
                      2, 1, damBreak});
         for (int phi : {20, 30, 40})
-            v.push_back({"angle_of_repose_" + std::to_string(phi), "|flank angle - phi| [degrees]",
-                         "angle in [phi - 3, phi + 6] degrees", 0, 1, 0,
-                         [phi](const CaseConfig& c) { return angleOfRepose(c, phi); }});
+            for (const auto& [suffix, surface] :
+                 {std::pair{"", YieldSurface::DruckerPrager}, std::pair{"_mohr_coulomb", YieldSurface::MohrCoulomb}}) {
+                const YieldSurface y = surface;
+                v.push_back({"angle_of_repose_" + std::to_string(phi) + suffix, "|flank angle - phi| [degrees]",
+                             "angle in [phi - 3, phi + 6] degrees", 0, 1, 0,
+                             [phi, y](const CaseConfig& c) { return angleOfRepose(c, phi, y); }});
+            }
         for (const auto& [suffix, surface] :
              {std::pair{"drucker_prager", YieldSurface::DruckerPrager}, std::pair{"mohr_coulomb", YieldSurface::MohrCoulomb}}) {
             const YieldSurface y = surface;
