@@ -346,8 +346,18 @@ void setKeys(V& v, ParticleSetDesc& d) {
                  .lo = 0.0,
                  .hi = 1e6},
              d.lambdaScale);
-    v.number(Key{.name = "mu_scale", .help = "scales the preset's mu (viscous: the shear modulus G)", .lo = 0.0, .hi = 1e6},
+    v.number(Key{.name = "mu_scale",
+                 .help = "scales the preset's mu (viscous: the shear modulus G; water has none)",
+                 .lo = 0.0,
+                 .hi = 1e6},
              d.muScale);
+    bool shear = true;
+    forEachMaterial(AllMaterials{}, [&]<class M>() {
+        if (d.material == M::kSceneName) shear = hasShearModulus<M>();
+    });
+    // 1 is the resolved scene's own value (every key written), so only a scale that would change something is refused.
+    v.check(shear || d.muScale == 1.0, "mu_scale",
+            d.material + " has no shear modulus to scale; lambda_scale scales its bulk modulus");
     v.number(Key{.name = "mass_scale", .help = "scales particle mass", .lo = 1e-6, .hi = 1e6}, d.massScale);
     v.integer(Key{.name = "seed", .help = "sampling seed", .lo = 0, .hi = 4294967295.0, .byDefault = "set index + 1"}, d.seed);
     v.list(Key{.name = "material_fields",

@@ -148,11 +148,15 @@ public:
         if (const json* j = take(k)) {
             if (!j->is_array()) fail(k.name, "expected a list of names, got " + quoted(*j) + "; known: " + joinNames(allowed));
             values.clear();
-            for (const json& item : *j) {
+            for (std::size_t i = 0; i < j->size(); ++i) {
+                const json& item = (*j)[i];
+                const std::string at = std::string(k.name) + "/" + std::to_string(i);
                 if (!item.is_string() || std::find(allowed.begin(), allowed.end(), item.get<std::string>()) == allowed.end())
-                    fail(k.name, "unknown " + std::string(k.noun) + " " + quoted(item) + "; known: " + joinNames(allowed));
-                if (std::find(values.begin(), values.end(), item.get<std::string>()) == values.end())
-                    values.push_back(item.get<std::string>());
+                    fail(at, "unknown " + std::string(k.noun) + " " + quoted(item) + "; known: " + joinNames(allowed));
+                // A name twice is a slip (a list edited by hand, or a typo for another name): say so, not drop it.
+                if (std::find(values.begin(), values.end(), item.get<std::string>()) != values.end())
+                    fail(at, std::string(k.noun) + " " + quoted(item) + " is already in the list");
+                values.push_back(item.get<std::string>());
             }
         }
         out_[std::string(k.name)] = values;

@@ -84,6 +84,16 @@ concept MaterialModel = requires(const typename M::Params& cp, typename M::Param
     };
 };
 
+/// Whether a set's mu_scale has a modulus to scale in M: a model without a shear modulus (water) declares
+/// `static constexpr bool kShearModulus = false;`, and the scene reader refuses mu_scale on it.
+template <class M>
+constexpr bool hasShearModulus() {
+    if constexpr (requires { M::kShearModulus; })
+        return M::kShearModulus;
+    else
+        return true;
+}
+
 template <class... Ms>
 struct MaterialList {
     static constexpr std::size_t size = sizeof...(Ms);

@@ -57,7 +57,9 @@ struct Water {
                     "hold negative pressure (the thesis's EOS: free-surface water turns cohesive); false clamps J to at most 1"},
             p.tension);
     }
-    /// A set's lambda_scale scales the bulk modulus, water's only Lame-like parameter; mu_scale has nothing to scale.
+    /// A set's lambda_scale scales the bulk modulus, water's only Lame-like parameter; mu_scale has nothing to scale
+    /// (a set giving it is refused, io/SceneKeys.h).
+    static constexpr bool kShearModulus = false;
     static void scaleStiffness(Params& p, double lambdaScale, double /*muScale*/) {
         p.bulkModulus = float(double(p.bulkModulus) * lambdaScale);
     }

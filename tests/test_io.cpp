@@ -300,9 +300,36 @@ TEST(Output, PointsCarryHoudinisAttributesAndGroups) {
     } catch (const SceneError& e) {
         what = e.what();
     }
-    EXPECT_NE(what.find("bad.json: /output/attributes: unknown point attribute \"stress\"; known: J, Jp, stress_norm, F"),
+    EXPECT_NE(what.find("bad.json: /output/attributes/1: unknown point attribute \"stress\"; known: J, Jp, stress_norm, F"),
               std::string::npos)
         << what;
+    // A name given twice is refused where the second one stands, not silently dropped.
+    what.clear();
+    try {
+        loadScene(writeScene(dir, "twice.json", R"({"output": {"attributes": ["J", "F", "J"]}})"));
+    } catch (const SceneError& e) {
+        what = e.what();
+    }
+    EXPECT_NE(what.find("twice.json: /output/attributes/2: point attribute \"J\" is already in the list"), std::string::npos)
+        << what;
+}
+
+TEST(SceneErrors, MuScaleOnAMaterialWithoutAShearModulusIsRefused) {
+    const std::string dir = tempDir("mu_scale");
+    const auto scene = [](const std::string& material) {
+        return R"({"sets": [{"material": ")" + material +
+               R"(", "mu_scale": 2, "shape": {"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}}]})";
+    };
+    std::string what;
+    try {
+        loadScene(writeScene(dir, "water.json", scene("water")));
+    } catch (const SceneError& e) {
+        what = e.what();
+    }
+    EXPECT_NE(what.find("water.json: /sets/0/mu_scale: water has no shear modulus to scale"), std::string::npos) << what;
+    // Every other material has one: the key is read, not refused.
+    for (const char* m : {"jelly", "rubber", "snow", "sand", "metal", "viscous"})
+        EXPECT_NO_THROW(loadScene(writeScene(dir, std::string(m) + ".json", scene(m)))) << m;
 }
 
 TEST(Output, FrameReadsBackWithSameParticles) {

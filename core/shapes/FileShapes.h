@@ -59,14 +59,17 @@ struct VdbShape {
 
     template <class V>
     static void keys(V& v, VdbShape& s) {
-        v.text(Key{.name = "file",
-                   .help = "VDB file holding a level set, relative to the scene file; with $F (or $F4, padded to 4 digits) a "
-                           "sequence, one file per frame, interpolated in time (a deforming collider)",
-                   .required = true},
-               s.file);
+        v.text(
+            Key{.name = "file",
+                .help = "VDB file holding a level set, relative to the scene file; a collider's may hold $F (or $F4, padded to 4 "
+                        "digits): a sequence, one file per frame, interpolated in time (a deforming collider; a set's "
+                        "shape is one file)",
+                .required = true},
+            s.file);
         v.text(Key{.name = "grid", .help = "name of the level set grid in it"}, s.grid);
         v.text(Key{.name = "velocity_grid",
-                   .help = "a sequence's velocity grid (Houdini's `vel`); empty: the velocity the level sets' change implies"},
+                   .help = "a collider sequence's velocity grid (Houdini's `vel`); empty: the velocity the level sets' change "
+                           "implies. A set's shape takes none"},
                s.velocityGrid);
         v.object(Key{.name = "transform", .help = "places the file: translate, rotate, scale"},
                  [&](auto& t) { Placement::keys(t, s.transform); });
