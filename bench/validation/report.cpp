@@ -6,6 +6,7 @@
 #include <tbb/info.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -133,6 +134,19 @@ int stability(const std::string& dir, const std::string& only, const std::string
 
 }  // namespace
 
+/// Whether every name of a comma-separated list is one of `known` (an empty list is everything); says which is not.
+bool knownNames(const char* option, const std::string& list, const std::vector<std::string>& known) {
+    std::stringstream in(list);
+    for (std::string name; std::getline(in, name, ',');)
+        if (!name.empty() && std::find(known.begin(), known.end(), name) == known.end()) {
+            std::string all;
+            for (const std::string& k : known) all += (all.empty() ? "" : ", ") + k;
+            std::fprintf(stderr, "mpm_report: error: %s: unknown name \"%s\"; known: %s\n", option, name.c_str(), all.c_str());
+            return false;
+        }
+    return true;
+}
+
 int main(int argc, char** argv) {
     CLI::App app{"mpm_report: validation cases (error against run time) and the stability sweep"};
     app.require_subcommand(1);
@@ -155,6 +169,12 @@ int main(int argc, char** argv) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(n));
     if (!scenes.empty()) setSceneDirectory(scenes);
     try {
+        // A misspelt name would otherwise run nothing and still overwrite the report's machine.txt.
+        std::vector<std::string> caseNames;
+        for (const ValidationCase& vc : cases()) caseNames.push_back(vc.name);
+        if (!knownNames("--cases", only, caseNames) || !knownNames("--setups", setups, stabilitySetups()) ||
+            !knownNames("--materials", materials, stabilityMaterials()))
+            return 2;
         std::filesystem::create_directories(out);
         writeMachine(out, n);
         if (app.got_subcommand("accuracy")) return accuracy(out, only, quick, n);
