@@ -208,6 +208,8 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
             if (fields) scaled = std::get<typename M::Params>(fields->stiffest);
             const float w = restWaveSpeed<M>(scaled);
             if (!(w <= c)) c = w, stiffest = d.name;  // a NaN wave speed wins, and is reported below
+            if (const char* why = stiffening<M>(); why && b.stiffening.empty())
+                b.stiffening = "set " + d.name + "'s " + M::kSceneName + " " + why;
         });
         s.mass = s.volume * density * d.massScale;
         if (samples && !samples->positions.empty()) {
@@ -326,9 +328,17 @@ std::string describeBudget(const SceneBudget& b) {
     s << "); " << b.machineHolder << " " << gib(b.machineBytes) << "\n";
     s << "substeps per frame: about " << b.substepsPerFrame << " at the start (dt = " << b.dt << " s, set by " << b.stepCause
       << ")\n";
+    // Measured: a snowball thrown at a wall (scenes/snowball_wall.json) ran 31,171 substeps where 4,250 were estimated.
+    if (!b.stiffening.empty())
+        s << "  and fewer later: " << b.stiffening
+          << ", which shortens the step; a snowball thrown at a wall ran 7.3 times the substeps estimated here\n";
     if (b.runSeconds > 0.0) {
         const std::string d = duration(b.runSeconds);
-        s << "run time: " << (d.rfind("under", 0) == 0 ? "" : "about ") << d << " here (" << b.runBasis << ")\n";
+        s << "run time: "
+          << (d.rfind("under", 0) == 0 ? ""
+              : b.stiffening.empty()   ? "about "
+                                       : "at least ")
+          << d << " here (" << b.runBasis << ")\n";
     }
     return s.str();
 }

@@ -30,6 +30,7 @@ struct SceneBudget {
     double substepsPerFrame = 0.0;                   ///< at the start
     double dt = 0.0;                                 ///< the first step
     std::string stepCause;                           ///< what bounds it
+    std::string stiffening;             ///< the first set whose material stiffens as it deforms, in words: the step will shorten
     double particleSubsteps = 0.0;      ///< the work of the whole run: each particle's substeps, at the first step's rate
     double runSeconds = 0.0;            ///< the run's expected length on this machine (io/RunEstimate.h); 0: not estimated
     std::string runBasis;               ///< what runSeconds comes from, in words

@@ -21,6 +21,9 @@
 //     static Mat3f  deformationGradient(const State&, size_t i);                    // the elastic F the model keeps
 //     static float  plasticVolumeRatio(const State&, size_t i);                     // Jp, volume change from plasticity
 //     static float  plasticStrain(const State&, size_t i);                          // equivalent plastic strain
+//     // optional traits, read by the scene reader and the budget:
+//     static constexpr bool kShearModulus = false;  // no shear modulus: a set's mu_scale is refused (water)
+//     static constexpr const char* kStiffens;       // why its step shortens as it deforms, in words (snow)
 //     // optional, for n <= simd::kLanes consecutive particles (the SVD-based models run their SVDs in SIMD lanes):
 //     // (lane k's parameters m[k]: one set for all, or each particle's; materials/SvdBatch.h, LaneParams):
 //     static void   kirchhoffBatch(const LaneParams<Params>& m, const State&, size_t first, int n, Mat3f* tau);
@@ -92,6 +95,16 @@ constexpr bool hasShearModulus() {
         return M::kShearModulus;
     else
         return true;
+}
+
+/// Why M's step shortens as a run goes on, in words, or nullptr: a model whose stiffness grows as it deforms
+/// declares `static constexpr const char* kStiffens`, so that estimates made from the rest state say they are short.
+template <class M>
+constexpr const char* stiffening() {
+    if constexpr (requires { M::kStiffens; })
+        return M::kStiffens;
+    else
+        return nullptr;
 }
 
 template <class... Ms>

@@ -638,6 +638,47 @@ TEST(Safety, TheDisplacementRuleIsInTheEstimateAndNamedWhenItExceedsTheLimit) {
     EXPECT_NE(refused.output.find("set by the displacement rule"), std::string::npos) << refused.output;
 }
 
+TEST(Safety, TheEstimateSaysWhenAMaterialThatStiffensWillShortenTheStep) {
+    // Snow thrown at a wall packs and hardens, and its wave speed grows: the run takes more substeps a frame than
+    // the step at rest gives, and validate says so; jelly does not stiffen.
+    const std::string dir = tempDir("stiffens");
+    auto scene = [&](const std::string& material) {
+        return writeFile(dir + "/" + material + ".json", R"({"simulation": {"frames": 6, "fps": 24, "dx": 0.05},
+            "output": {"surface": false},
+            "sets": [{"name": "ball", "material": ")" + material +
+                                                             R"(", "velocity": [-8, 0, 0],
+                      "shape": {"type": "sphere", "center": [0.2, 0.3, 0], "radius": 0.15}}],
+            "colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [1, 0, 0], "boundary": "sticky"}]})");
+    };
+    const Result snow = runMpm({"validate", scene("snow")}, dir);
+    EXPECT_EQ(snow.code, 0) << snow.output;
+    EXPECT_NE(snow.output.find("and fewer later: set ball's snow hardens as it is packed"), std::string::npos) << snow.output;
+    const std::size_t at = snow.output.find("substeps per frame: about ");
+    ASSERT_NE(at, std::string::npos) << snow.output;
+    const int estimated = std::stoi(snow.output.substr(at + std::string("substeps per frame: about ").size()));
+    ASSERT_EQ(runMpm({"run", scene("snow"), "-o", dir + "/out", "--quiet"}, dir).code, 0);
+    // The most substeps any frame took: stats.csv's `substeps` column.
+    std::istringstream csv(readFile(dir + "/out/stats.csv"));
+    std::string line;
+    std::getline(csv, line);
+    const auto cells = [](const std::string& row) {
+        std::vector<std::string> out;
+        std::istringstream in(row);
+        for (std::string cell; std::getline(in, cell, ',');) out.push_back(cell);
+        return out;
+    };
+    const std::vector<std::string> header = cells(line);
+    const std::size_t column = std::find(header.begin(), header.end(), "substeps") - header.begin();
+    ASSERT_LT(column, header.size()) << line;
+    int most = 0;
+    while (std::getline(csv, line))
+        if (const std::vector<std::string> row = cells(line); row.size() > column) most = std::max(most, std::stoi(row[column]));
+    EXPECT_GT(most, estimated) << "the snow never took more substeps a frame than the estimate's " << estimated;
+    const Result jelly = runMpm({"validate", scene("jelly")}, dir);
+    EXPECT_EQ(jelly.code, 0) << jelly.output;
+    EXPECT_EQ(jelly.output.find("fewer later"), std::string::npos) << jelly.output;
+}
+
 TEST(Safety, SetNamesWithCommasSurviveTheMetadata) {
     const std::string dir = tempDir("names");
     const std::string scene = writeFile(dir + "/names.json", R"({
