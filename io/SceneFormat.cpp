@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "base/Text.h"
 #include "io/SceneKeys.h"
 #include "io/SceneReader.h"
 
@@ -15,12 +16,6 @@ std::string formatValue(double v) {
     std::ostringstream s;
     s << v;
     return s.str();
-}
-
-std::string joinNames(const std::vector<std::string>& v, const char* sep = ", ") {
-    std::string out;
-    for (std::size_t i = 0; i < v.size(); ++i) out += (i ? sep : "") + v[i];
-    return out;
 }
 
 /// A key visitor that writes one Markdown table row per key: key | default | allowed | meaning.

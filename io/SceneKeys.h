@@ -100,13 +100,23 @@ void materialFieldKeys(V& v, MaterialFieldDesc& f, const std::string& material) 
     }
 }
 
+/// Calls f.template operator()<M>() for the material model M whose scene name is `material`; false when none is.
+template <class F>
+bool withMaterialNamed(const std::string& material, F&& f) {
+    bool found = false;
+    forEachMaterial(AllMaterials{}, [&]<class M>() {
+        if (found || material != M::kSceneName) return;
+        found = true;
+        f.template operator()<M>();
+    });
+    return found;
+}
+
 /// The colour a set's points take unless the set gives one: its material's kColour (linear RGB; tools/render_blender.py
 /// draws with it).
 inline Vec3f defaultColour(const std::string& material) {
     Vec3f colour(0.6f, 0.6f, 0.6f);
-    forEachMaterial(AllMaterials{}, [&]<class M>() {
-        if (material == M::kSceneName) colour = Vec3f(M::kColour[0], M::kColour[1], M::kColour[2]);
-    });
+    withMaterialNamed(material, [&]<class M>() { colour = Vec3f(M::kColour[0], M::kColour[1], M::kColour[2]); });
     return colour;
 }
 
@@ -352,9 +362,7 @@ void setKeys(V& v, ParticleSetDesc& d) {
                  .hi = 1e6},
              d.muScale);
     bool shear = true;
-    forEachMaterial(AllMaterials{}, [&]<class M>() {
-        if (d.material == M::kSceneName) shear = hasShearModulus<M>();
-    });
+    withMaterialNamed(d.material, [&]<class M>() { shear = hasShearModulus<M>(); });
     // 1 is the resolved scene's own value (every key written), so only a scale that would change something is refused.
     v.check(shear || d.muScale == 1.0, "mu_scale",
             d.material + " has no shear modulus to scale; lambda_scale scales its bulk modulus");

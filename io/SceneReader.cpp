@@ -15,6 +15,7 @@
 #include <set>
 #include <sstream>
 
+#include "base/Text.h"
 #include "io/SceneKeys.h"
 
 namespace mpm {
@@ -22,12 +23,6 @@ namespace mpm {
 using json = nlohmann::ordered_json;
 
 namespace {
-
-std::string joinNames(const std::vector<std::string>& v) {
-    std::string out;
-    for (std::size_t i = 0; i < v.size(); ++i) out += (i ? ", " : "") + v[i];
-    return out;
-}
 
 std::string formatNumber(double v) {
     std::ostringstream s;

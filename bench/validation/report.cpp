@@ -18,6 +18,7 @@
 #include "../Machine.h"
 #include "Cases.h"
 #include "Stability.h"
+#include "base/Text.h"
 #include "io/AtomicFile.h"
 #include "io/Scene.h"
 
@@ -139,9 +140,8 @@ bool knownNames(const char* option, const std::string& list, const std::vector<s
     std::stringstream in(list);
     for (std::string name; std::getline(in, name, ',');)
         if (!name.empty() && std::find(known.begin(), known.end(), name) == known.end()) {
-            std::string all;
-            for (const std::string& k : known) all += (all.empty() ? "" : ", ") + k;
-            std::fprintf(stderr, "mpm_report: error: %s: unknown name \"%s\"; known: %s\n", option, name.c_str(), all.c_str());
+            std::fprintf(stderr, "mpm_report: error: %s: unknown name \"%s\"; known: %s\n", option, name.c_str(),
+                         joinNames(known).c_str());
             return false;
         }
     return true;
