@@ -3,8 +3,9 @@
 
     python3 tools/validation_report.py docs/validation
 
-Reads accuracy.csv, stability.csv and machine.txt in that directory; writes accuracy_<case>.png,
-stability.png and report.md there.
+Reads accuracy.csv, stability.csv, machine.txt and (when there) notes.md in that directory; writes
+accuracy_<case>.png, stability.png and report.md there. notes.md says which rows were run apart from the rest
+(another machine, another thread count), so that their wall times are read as such.
 """
 import csv
 import math
@@ -157,6 +158,9 @@ def main():
              "Regenerate with `bash tools/validation_report.sh` (cases: `bench/validation/Cases.cpp`, scenes:",
              "`scenes/validation/`, bands: `docs/validation/cases.md`). Numbers below come from this machine:", "",
              "```", machine, "```", ""]
+    notes = os.path.join(out_dir, "notes.md")
+    if os.path.exists(notes):
+        lines += [open(notes).read().strip(), ""]
     if acc:
         lines += ["Accuracy runs took %.0f s of simulation in all." % sum(float(r["wall_seconds"]) for r in acc), ""]
     lines += accuracy_section(acc, out_dir)

@@ -48,4 +48,7 @@ std::vector<std::pair<double, double>> readTable(const std::string& file);
 /// The contact cases (bench/validation/ContactCases.cpp), in the order of docs/validation/cases.md.
 void addContactCases(std::vector<ValidationCase>& cases);
 
+/// The viscous and yield-stress liquid cases (bench/validation/ViscousCases.cpp).
+void addViscousCases(std::vector<ValidationCase>& cases);
+
 }  // namespace mpm::validation::support

@@ -591,6 +591,7 @@ const std::vector<ValidationCase>& cases() {
         v.push_back({"metal_bar_tension",
                      "max(|yield stress / sigma_y - 1|, |hardening slope / (E H / (E + H)) - 1|), middle third", "< 2%", 0, 0, 0,
                      metalBarTension});
+        support::addViscousCases(v);
         return v;
     }();
     return all;
