@@ -82,23 +82,39 @@ inline std::string vdbWithoutUuid(const std::string& path) {
     return b;
 }
 
+/// The cells of one line of stats.csv (numbers and names without commas: no quoting).
+inline std::vector<std::string> csvCells(const std::string& line) {
+    std::vector<std::string> c;
+    std::istringstream l(line);
+    for (std::string cell; std::getline(l, cell, ',');) c.push_back(cell);
+    if (!line.empty() && line.back() == ',') c.emplace_back();
+    return c;
+}
+
+/// One column of a stats.csv by its header's name, a cell per row; empty when the header has no such column.
+inline std::vector<std::string> statsColumn(const std::string& path, const std::string& name) {
+    std::istringstream in(readFile(path));
+    std::string line;
+    std::getline(in, line);
+    const std::vector<std::string> names = csvCells(line);
+    const std::size_t k = std::size_t(std::find(names.begin(), names.end(), name) - names.begin());
+    std::vector<std::string> column;
+    if (k == names.size()) return column;
+    while (std::getline(in, line))
+        if (const std::vector<std::string> row = csvCells(line); k < row.size()) column.push_back(row[k]);
+    return column;
+}
+
 /// stats.csv without the wall_seconds column (the last one).
 inline std::string statsWithoutWallTime(const std::string& path) {
     std::istringstream in(readFile(path));
     std::string out, header;
     std::getline(in, header);
     // The column by its name: rigid bodies' columns follow it.
-    const auto cells = [](const std::string& line) {
-        std::vector<std::string> c;
-        std::istringstream l(line);
-        for (std::string cell; std::getline(l, cell, ',');) c.push_back(cell);
-        if (!line.empty() && line.back() == ',') c.emplace_back();
-        return c;
-    };
-    const std::vector<std::string> names = cells(header);
+    const std::vector<std::string> names = csvCells(header);
     const std::size_t wall = std::size_t(std::find(names.begin(), names.end(), "wall_seconds") - names.begin());
     const auto without = [&](const std::string& line) {
-        std::vector<std::string> c = cells(line);
+        std::vector<std::string> c = csvCells(line);
         if (wall < c.size()) c.erase(c.begin() + std::ptrdiff_t(wall));
         std::string kept;
         for (std::size_t i = 0; i < c.size(); ++i) kept += (i ? "," : "") + c[i];

@@ -658,21 +658,10 @@ TEST(Safety, TheEstimateSaysWhenAMaterialThatStiffensWillShortenTheStep) {
     const int estimated = std::stoi(snow.output.substr(at + std::string("substeps per frame: about ").size()));
     ASSERT_EQ(runMpm({"run", scene("snow"), "-o", dir + "/out", "--quiet"}, dir).code, 0);
     // The most substeps any frame took: stats.csv's `substeps` column.
-    std::istringstream csv(readFile(dir + "/out/stats.csv"));
-    std::string line;
-    std::getline(csv, line);
-    const auto cells = [](const std::string& row) {
-        std::vector<std::string> out;
-        std::istringstream in(row);
-        for (std::string cell; std::getline(in, cell, ',');) out.push_back(cell);
-        return out;
-    };
-    const std::vector<std::string> header = cells(line);
-    const std::size_t column = std::find(header.begin(), header.end(), "substeps") - header.begin();
-    ASSERT_LT(column, header.size()) << line;
+    const std::vector<std::string> substeps = statsColumn(dir + "/out/stats.csv", "substeps");
+    ASSERT_FALSE(substeps.empty());
     int most = 0;
-    while (std::getline(csv, line))
-        if (const std::vector<std::string> row = cells(line); row.size() > column) most = std::max(most, std::stoi(row[column]));
+    for (const std::string& cell : substeps) most = std::max(most, std::stoi(cell));
     EXPECT_GT(most, estimated) << "the snow never took more substeps a frame than the estimate's " << estimated;
     const Result jelly = runMpm({"validate", scene("jelly")}, dir);
     EXPECT_EQ(jelly.code, 0) << jelly.output;
