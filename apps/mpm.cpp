@@ -191,7 +191,10 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
 
 int validate(const std::string& scenePath, bool strict, bool printScene) {
     const SceneDesc scene = loadScene(scenePath);
-    SceneBudget budget = estimateBudget(scene, true);
+    // Each set sampled, and each file set's distance field built, once for the estimate and the warnings.
+    SetCache sets(scene);
+    sets.note = [](const std::string& what) { std::fprintf(stderr, "mpm: %s\n", what.c_str()); };
+    SceneBudget budget = estimateBudget(scene, true, 1, &sets);
     // The run time from costs measured here, on the threads the run takes by default.
     if (budget.problems.empty()) {
         const int threads = scene.threads > 0 ? scene.threads : int(std::thread::hardware_concurrency());
@@ -203,7 +206,7 @@ int validate(const std::string& scenePath, bool strict, bool printScene) {
     std::fprintf(stderr, "%s", describeBudget(budget).c_str());
     checkBudget(scene, budget);
     std::vector<std::string> bodies;
-    std::vector<std::string> warnings = sceneWarnings(scene, &bodies);
+    std::vector<std::string> warnings = sceneWarnings(scene, &bodies, &sets);
     for (const std::string& b : bodies) std::fprintf(stderr, "%s\n", b.c_str());
     // A scene far larger than meant (sizes in other units: a radius of 2 m for 2 cm) shows first as a run of hours.
     constexpr double kLongRun = 3600.0;

@@ -169,7 +169,9 @@ double addressSpaceLeft() {
     return std::max(0.0, double(limit.rlim_cur) - pages * double(::sysconf(_SC_PAGE_SIZE)));
 }
 
-SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks) {
+SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks, SetCache* given) {
+    std::optional<SetCache> own;
+    SetCache& cache = given ? *given : own.emplace(scene);
     SceneBudget b;
     const SimulationSettings& st = scene.settings;
     const double dx = st.dx, cell = dx * dx * dx;
@@ -181,13 +183,13 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
         SetBudget s;
         s.name = d.name;
         Vec3d lo, hi;
-        setExtent(set, s.volume, lo, hi);
+        cache.extent(i, s.volume, lo, hi);
         const double largestCoordinate = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
         const double expected = d.count > 0 ? double(d.count) : s.volume / cell * d.particlesPerCell;
-        std::optional<SetSamples> samples;  // when counted exactly
-        std::optional<FieldParams> fields;  // its material fields at those samples
+        const SetSamples* samples = nullptr;  // when counted exactly
+        std::optional<FieldParams> fields;    // its material fields at those samples
         if (!d.continuous && countExactly && expected <= kSampleUpTo) {
-            samples = sampleSet(set);
+            samples = &cache.samples(i);
             if (!d.materialFields.empty()) fields = fieldParams(set, *samples, Comm::single());
         }
         if (samples)
@@ -208,7 +210,7 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks)
             if (fields) scaled = std::get<typename M::Params>(fields->stiffest);
             const float w = restWaveSpeed<M>(scaled);
             if (!(w <= c)) c = w, stiffest = d.name;  // a NaN wave speed wins, and is reported below
-            if (const char* why = stiffening<M>(); why && b.stiffening.empty())
+            if (const char* why = stiffening<M>(scaled); why && b.stiffening.empty())
                 b.stiffening = "set " + d.name + "'s " + M::kSceneName + " " + why;
         });
         s.mass = s.volume * density * d.massScale;

@@ -56,7 +56,9 @@ double addressSpaceLeft();
 /// Estimates the scene's cost. With countExactly, sets of up to a few million particles are sampled to count
 /// them exactly (validate does; a run, which samples them anyway, does not). On `ranks` processes the memory
 /// is rank 0's: its share of the particles and, while it writes a frame or a checkpoint, all of them gathered.
-SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks = 1);
+/// `cache`, if given, is the scene's (validate shares its samples and fields with sceneWarnings).
+class SetCache;
+SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks = 1, SetCache* cache = nullptr);
 /// The estimate in words, one line per item, for `mpm validate`.
 std::string describeBudget(const SceneBudget& budget);
 /// Throws SceneError ("FILE: /path: problem") when the budget has problems.

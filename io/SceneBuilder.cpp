@@ -501,8 +501,9 @@ SetSamples pointCloudSet(const SetEntry& set, const PointsShape& shape) {
 
 }  // namespace
 
-/// The set's shape sampled: positions, a point cloud's velocities, the volume.
-static SetSamples sampleSetShape(const SetEntry& set, const SamplePart& part) {
+/// The set's shape sampled: positions, a point cloud's velocities, the volume. `region`, when given, is the set's
+/// (regionOf), built before.
+static SetSamples sampleSetShape(const SetEntry& set, const SamplePart& part, const SetRegionIn* region = nullptr) {
     const SceneDesc& scene = set.scene;
     const ParticleSetDesc& d = set.desc();
     if (const auto* points = std::get_if<PointsShape>(&d.shape)) {
@@ -520,7 +521,7 @@ static SetSamples sampleSetShape(const SetEntry& set, const SamplePart& part) {
         return all;
     }
     if (d.continuous || isOutlet(d.shape)) throw std::logic_error("sampleSetShape: a continuous source is a stream (streamOf)");
-    const SetRegionIn r = regionOf(set);
+    const SetRegionIn r = region ? *region : regionOf(set);
     const double s = r.placement.scale;
     // Sampled where the file's cells are dx / scale, then placed: the same particles wherever the asset is put.
     SetSamples out;
@@ -574,6 +575,86 @@ static void addInitialVelocities(const SetEntry& set, SetSamples& out, const Com
 SetSamples sampleSet(const SetEntry& set, const Comm& comm, const std::atomic<int>* stop) {
     SetSamples out = sampleSetShape(set, SamplePart{comm.rank(), comm.size(), stop});
     addInitialVelocities(set, out, comm);
+    return out;
+}
+
+/// setExtent of a set whose region is built.
+static void regionExtent(const SetRegionIn& r, double& volume, Vec3d& lo, Vec3d& hi) {
+    const double s = r.placement.scale;
+    volume = shapeVolume(r.region) * s * s * s;
+    Vec3d a, b;
+    std::visit([&](const auto& shape) { shape.bounds(a, b); }, r.region);
+    lo = Vec3d::Constant(INFINITY), hi = Vec3d::Constant(-INFINITY);
+    for (int c = 0; c < 8; ++c) {
+        const Vec3d corner((c & 1) ? b[0] : a[0], (c & 2) ? b[1] : a[1], (c & 4) ? b[2] : a[2]);
+        const Vec3d x = r.placement.apply(corner);
+        lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+    }
+}
+
+struct SetCache::Impl {
+    const SetCache& owner;
+    const SceneDesc& scene;
+    std::vector<std::optional<SetRegionIn>> regions;
+    std::vector<std::optional<SetSamples>> samples;
+    double keptBytes = 0.0;
+    std::size_t built = 0;  ///< file sets' fields
+
+    /// Set i's region: the one kept, or built (and kept while the fields kept stay under kKeptFieldBytes).
+    SetRegionIn region(std::size_t i) {
+        if (regions[i]) return *regions[i];
+        const SetEntry set(scene, i);
+        std::visit(
+            [&]<class S>(const S& shape) {
+                if constexpr (kFromFile<S>) {
+                    owner.note("building set " + std::to_string(i) + " '" + set.desc().name + "''s distance field from " +
+                               shape.file);
+                    ++built;
+                }
+            },
+            set.desc().shape);
+        SetRegionIn r = regionOf(set);
+        const double bytes = setFieldBytes(set);
+        if (keptBytes + bytes <= kKeptFieldBytes) regions[i] = r, keptBytes += bytes;
+        return r;
+    }
+};
+
+SetCache::SetCache(const SceneDesc& scene) : impl_(new Impl{*this, scene, {}, {}}) {
+    impl_->regions.resize(scene.sets.size());
+    impl_->samples.resize(scene.sets.size());
+}
+SetCache::~SetCache() = default;
+
+const SceneDesc& SetCache::scene() const { return impl_->scene; }
+std::size_t SetCache::fieldsBuilt() const { return impl_->built; }
+
+void SetCache::extent(std::size_t i, double& volume, Vec3d& lo, Vec3d& hi) {
+    const SetEntry set(impl_->scene, i);
+    const ParticleSetDesc& d = set.desc();
+    if (d.continuous || isOutlet(d.shape) || std::holds_alternative<PointsShape>(d.shape))
+        setExtent(set, volume, lo, hi);
+    else
+        regionExtent(impl_->region(i), volume, lo, hi);
+}
+
+const SetSamples& SetCache::samples(std::size_t i) {
+    std::optional<SetSamples>& kept = impl_->samples[i];
+    if (kept) return *kept;
+    const SetEntry set(impl_->scene, i);
+    if (std::holds_alternative<PointsShape>(set.desc().shape)) return kept.emplace(sampleSet(set));
+    const SetRegionIn r = impl_->region(i);
+    kept.emplace(sampleSetShape(set, SamplePart{}, &r));
+    addInitialVelocities(set, *kept, Comm::single());
+    return *kept;
+}
+
+SetSamples SetCache::samplesOf(const SceneDesc& variant, std::size_t i) {
+    const SetEntry set(variant, i);
+    if (std::holds_alternative<PointsShape>(set.desc().shape)) return sampleSet(set);
+    const SetRegionIn r = impl_->region(i);
+    SetSamples out = sampleSetShape(set, SamplePart{}, &r);
+    addInitialVelocities(set, out, Comm::single());
     return out;
 }
 
@@ -652,17 +733,7 @@ void setExtent(const SetEntry& set, double& volume, Vec3d& lo, Vec3d& hi) {
         for (const Vec3d& x : s.positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
         return;
     }
-    const SetRegionIn r = regionOf(set);
-    const double s = r.placement.scale;
-    volume = shapeVolume(r.region) * s * s * s;
-    Vec3d a, b;
-    std::visit([&](const auto& shape) { shape.bounds(a, b); }, r.region);
-    lo = Vec3d::Constant(INFINITY), hi = Vec3d::Constant(-INFINITY);
-    for (int c = 0; c < 8; ++c) {
-        const Vec3d corner((c & 1) ? b[0] : a[0], (c & 2) ? b[1] : a[1], (c & 4) ? b[2] : a[2]);
-        const Vec3d x = r.placement.apply(corner);
-        lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-    }
+    regionExtent(regionOf(set), volume, lo, hi);
 }
 
 namespace {
@@ -760,7 +831,8 @@ std::vector<long long> countInside(const SetEntry& set, const std::vector<Vec3d>
 /// first few it overlaps. Only pairs whose boxes meet are tested, so hundreds of sets answer in a blink (every
 /// pair tested, 300 overlapping sets took 17 s and printed 14 MB), and a set's region is built only when another
 /// set's box meets it, one at a time: a mesh set's distance field lives while it is tested, as when it is sampled.
-void overlapWarnings(const SceneDesc& scene, const std::vector<std::vector<Vec3d>>& positions, std::vector<std::string>& out) {
+void overlapWarnings(SetCache& cache, const std::vector<std::vector<Vec3d>>& positions, std::vector<std::string>& out) {
+    const SceneDesc& scene = cache.scene();
     constexpr std::size_t kNamedOverlaps = 3;
     const std::size_t n = scene.sets.size();
     std::vector<Eigen::AlignedBox3d> box(n);
@@ -779,7 +851,7 @@ void overlapWarnings(const SceneDesc& scene, const std::vector<std::vector<Vec3d
         for (std::size_t b = 0; b < n; ++b) {
             if (a == b || positions[b].empty() || scene.sets[a].startFrame != scene.sets[b].startFrame) continue;
             if (!reach.intersects(box[b])) continue;
-            if (!region) region = regionOf(SetEntry(scene, a));
+            if (!region) region = cache.impl()->region(a);
             const Placement& t = region->placement;
             std::size_t count = 0;
             for (const Vec3d& x : positions[b]) {
@@ -808,7 +880,9 @@ void overlapWarnings(const SceneDesc& scene, const std::vector<std::vector<Vec3d
 
 }  // namespace
 
-std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::string>* bodies) {
+std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::string>* bodies, SetCache* given) {
+    std::optional<SetCache> own;
+    SetCache& cache = given ? *given : own.emplace(scene);
     std::vector<std::string> out;
     // Explicit MPM is stable for CFL numbers below about 1 (the stability sweep's bound, docs/method.md section 8).
     constexpr double kExplicitBound = 1.0;
@@ -851,7 +925,7 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
         if (d.continuous || isOutlet(d.shape)) continue;  // a stream enters over time
         double volume = 0.0;
         Vec3d lo, hi;
-        setExtent(set, volume, lo, hi);
+        cache.extent(i, volume, lo, hi);
         const double dx = scene.settings.dx,
                      expected = d.count > 0 ? double(d.count) : volume / (dx * dx * dx) * d.particlesPerCell;
         if (expected > kSampleUpTo) {
@@ -863,7 +937,7 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
             ParticleSetDesc& c = coarse.sets[i];
             c.particlesPerCell *= kCoarseSample / expected;
             if (c.count > 0) c.count = (long long)kCoarseSample;
-            const SetSamples coarseSamples = sampleSet(SetEntry(coarse, i));
+            const SetSamples coarseSamples = cache.samplesOf(coarse, i);
             // Its material fields, on the coarse samples: their files, grids and values at those points.
             if (!set.desc().materialFields.empty()) fieldParams(SetEntry(coarse, i), coarseSamples, Comm::single());
             const std::vector<Vec3d>& few = coarseSamples.positions;
@@ -873,14 +947,14 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
             setWarnings(set, (long long)expected, inside, out, true);
             continue;
         }
-        const SetSamples samples = sampleSet(set);
+        const SetSamples& samples = cache.samples(i);
         // Its material fields: their files, grids and every particle's values.
         if (!set.desc().materialFields.empty()) fieldParams(set, samples, Comm::single());
         positions[i] = samples.positions;
         if (positions[i].empty()) noParticleFits(set);
         setWarnings(set, (long long)positions[i].size(), countInside(set, positions[i], colliders), out);
     }
-    overlapWarnings(scene, positions, out);
+    overlapWarnings(cache, positions, out);
     return out;
 }
 

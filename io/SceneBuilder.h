@@ -59,6 +59,38 @@ Emitter::Stream streamOf(const SetEntry& set);
 /// The set's volume and its bounds in the scene, without sampling it (reads its file, if it has one).
 void setExtent(const SetEntry& set, double& volume, Vec3d& lo, Vec3d& hi);
 
+/// What validate reads of each set more than once (its extent and samples for the budget, again for the warnings, and
+/// its region for the overlap test), computed once: a mesh or VDB set's distance field is the costly part (two
+/// overlapping 0.4M-particle mesh sets took 22 s to validate, building each field five times). Fields are kept
+/// while those kept take at most kKeptFieldBytes in all (setFieldBytes); past that a field is built again where it
+/// is needed, so validate holds no more than that beyond one field at a time, as the run's set-up does.
+class SetCache {
+public:
+    static constexpr double kKeptFieldBytes = 1 << 30;
+    explicit SetCache(const SceneDesc& scene);
+    ~SetCache();
+    SetCache(const SetCache&) = delete;
+    SetCache& operator=(const SetCache&) = delete;
+    const SceneDesc& scene() const;
+    /// setExtent of set i.
+    void extent(std::size_t i, double& volume, Vec3d& lo, Vec3d& hi);
+    /// sampleSet of set i, one process's whole set.
+    const SetSamples& samples(std::size_t i);
+    /// Set i of `variant`, a copy of the cache's scene with other particle counts (the same shapes), sampled in the
+    /// region of the cache's set i.
+    SetSamples samplesOf(const SceneDesc& variant, std::size_t i);
+    /// How many distance fields of file sets it has built.
+    std::size_t fieldsBuilt() const;
+    /// Called as each file set's distance field is about to be built (the slow part: validate says what it does).
+    std::function<void(const std::string&)> note = [](const std::string&) {};
+
+    struct Impl;  ///< defined in io/SceneBuilder.cpp, whose passes read the regions kept
+    Impl* impl() { return impl_.get(); }
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
 /// Sets expected to hold more particles than this are not sampled by validate (to count them, or to look for
 /// overlaps): it answers in seconds whatever the scene's size.
 inline constexpr double kSampleUpTo = 2e6;
@@ -67,7 +99,9 @@ inline constexpr double kSampleUpTo = 2e6;
 /// sets (up to kSampleUpTo particles) and builds the colliders (mpm validate prints these; with --strict they fail it).
 inline constexpr long long kFewParticles = 100;
 /// `bodies`, if given, receives a line per rigid body: its mass, centre of mass and principal moments of inertia.
-std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::string>* bodies = nullptr);
+/// `cache`, if given, is the scene's (its samples and fields are shared with estimateBudget's).
+std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::string>* bodies = nullptr,
+                                       SetCache* cache = nullptr);
 
 /// The values the builder derives for keys a scene leaves to it (Key::derived): each collider's pivot (its
 /// centre) and so its keyframes' positions, a mesh collider's voxel, and each spinning set's pivot (its centroid).

@@ -23,7 +23,7 @@
 //     static float  plasticStrain(const State&, size_t i);                          // equivalent plastic strain
 //     // optional traits, read by the scene reader and the budget:
 //     static constexpr bool kShearModulus = false;  // no shear modulus: a set's mu_scale is refused (water)
-//     static constexpr const char* kStiffens;       // why its step shortens as it deforms, in words (snow)
+//     static const char* stiffens(const Params&);  // why its step shortens as it deforms, in words, or nullptr (snow)
 //     // optional, for n <= simd::kLanes consecutive particles (the SVD-based models run their SVDs in SIMD lanes):
 //     // (lane k's parameters m[k]: one set for all, or each particle's; materials/SvdBatch.h, LaneParams):
 //     static void   kirchhoffBatch(const LaneParams<Params>& m, const State&, size_t first, int n, Mat3f* tau);
@@ -97,12 +97,13 @@ constexpr bool hasShearModulus() {
         return true;
 }
 
-/// Why M's step shortens as a run goes on, in words, or nullptr: a model whose stiffness grows as it deforms
-/// declares `static constexpr const char* kStiffens`, so that estimates made from the rest state say they are short.
+/// Why M's step shortens as a run goes on with parameters p, in words, or nullptr: a model whose stiffness can grow
+/// as it deforms declares `static const char* stiffens(const Params&)`, so that estimates made from the rest state
+/// say they are short where it does (snow with a hardening coefficient, not without).
 template <class M>
-constexpr const char* stiffening() {
-    if constexpr (requires { M::kStiffens; })
-        return M::kStiffens;
+const char* stiffening(const typename M::Params& p) {
+    if constexpr (requires { M::stiffens(p); })
+        return M::stiffens(p);
     else
         return nullptr;
 }

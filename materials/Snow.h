@@ -18,9 +18,6 @@ struct Snow {
     static constexpr float kColour[3] = {0.92f, 0.94f, 0.97f};
     static constexpr const char* kSummary =
         "Stomakhin et al. 2013 snow: fixed corotated on F_E, hardening, clamped singular values";
-    /// Packed snow stiffens, and its wave speed with it: the CFL step at rest overestimates the run's.
-    static constexpr const char* kStiffens = "hardens as it is packed (its moduli grow as exp(xi (1 - J_P)))";
-
     struct Params {
         float density = kThesisElasticDensity;  ///< thesis Fig. 6.1
         float mu = Lame::fromYoung(kThesisElastic.E, kThesisElastic.nu).mu;
@@ -29,6 +26,11 @@ struct Snow {
         float thetaS = 0.0075f;  ///< critical stretch
         float xi = 10.0f;        ///< hardening coefficient
     };
+
+    /// Packed snow stiffens (xi > 0), and its wave speed with it: the CFL step at rest overestimates the run's.
+    static const char* stiffens(const Params& p) {
+        return p.xi > 0.0f ? "hardens as it is packed (its moduli grow as exp(xi (1 - J_P)))" : nullptr;
+    }
 
     struct State {
         std::vector<Mat3f> Fe;

@@ -642,11 +642,11 @@ TEST(Safety, TheEstimateSaysWhenAMaterialThatStiffensWillShortenTheStep) {
     // Snow thrown at a wall packs and hardens, and its wave speed grows: the run takes more substeps a frame than
     // the step at rest gives, and validate says so; jelly does not stiffen.
     const std::string dir = tempDir("stiffens");
-    auto scene = [&](const std::string& material) {
+    auto scene = [&](const std::string& material, const std::string& params = "{}") {
         return writeFile(dir + "/" + material + ".json", R"({"simulation": {"frames": 6, "fps": 24, "dx": 0.05},
             "output": {"surface": false},
             "sets": [{"name": "ball", "material": ")" + material +
-                                                             R"(", "velocity": [-8, 0, 0],
+                                                             R"(", "velocity": [-8, 0, 0], "material_params": )" + params + R"(,
                       "shape": {"type": "sphere", "center": [0.2, 0.3, 0], "radius": 0.15}}],
             "colliders": [{"type": "plane", "point": [0, 0, 0], "normal": [1, 0, 0], "boundary": "sticky"}]})");
     };
@@ -666,6 +666,10 @@ TEST(Safety, TheEstimateSaysWhenAMaterialThatStiffensWillShortenTheStep) {
     const Result jelly = runMpm({"validate", scene("jelly")}, dir);
     EXPECT_EQ(jelly.code, 0) << jelly.output;
     EXPECT_EQ(jelly.output.find("fewer later"), std::string::npos) << jelly.output;
+    // Snow without hardening (xi = 0) keeps its moduli however it is packed: no word either.
+    const Result soft = runMpm({"validate", scene("snow", R"({"xi": 0})")}, dir);
+    EXPECT_EQ(soft.code, 0) << soft.output;
+    EXPECT_EQ(soft.output.find("fewer later"), std::string::npos) << soft.output;
 }
 
 TEST(Safety, SetNamesWithCommasSurviveTheMetadata) {
