@@ -224,7 +224,8 @@ int validate(const std::string& scenePath, bool strict, bool printScene) {
                      warnings.size() == 1 ? "" : "s");
         return kExitBadInput;
     }
-    std::fprintf(stderr, "%s: valid (%zu particle sets)\n", scenePath.c_str(), scene.sets.size());
+    std::fprintf(stderr, "%s: valid (%zu particle set%s)\n", scenePath.c_str(), scene.sets.size(),
+                 scene.sets.size() == 1 ? "" : "s");
     return kExitOk;
 }
 

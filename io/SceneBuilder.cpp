@@ -607,7 +607,7 @@ struct SetCache::Impl {
         std::visit(
             [&]<class S>(const S& shape) {
                 if constexpr (kFromFile<S>) {
-                    owner.note("building set " + std::to_string(i) + " '" + set.desc().name + "''s distance field from " +
+                    owner.note("building the distance field of set " + std::to_string(i) + " '" + set.desc().name + "' from " +
                                shape.file);
                     ++built;
                 }
@@ -829,8 +829,8 @@ std::vector<long long> countInside(const SetEntry& set, const std::vector<Vec3d>
 
 /// Each set's word on the other sets emitted at the same time into the same space: one line per set, naming the
 /// first few it overlaps. Only pairs whose boxes meet are tested, so hundreds of sets answer in a blink (every
-/// pair tested, 300 overlapping sets took 17 s and printed 14 MB), and a set's region is built only when another
-/// set's box meets it, one at a time: a mesh set's distance field lives while it is tested, as when it is sampled.
+/// pair tested, 300 overlapping sets took 17 s and printed 14 MB), and a set's region is read only when another
+/// set's box meets it: the one its sampling built, which the cache keeps (or built again past the cache's bound).
 void overlapWarnings(SetCache& cache, const std::vector<std::vector<Vec3d>>& positions, std::vector<std::string>& out) {
     const SceneDesc& scene = cache.scene();
     constexpr std::size_t kNamedOverlaps = 3;
@@ -871,10 +871,13 @@ void overlapWarnings(SetCache& cache, const std::vector<std::vector<Vec3d>>& pos
                   << scene.sets[a].name << "\")";
         }
         const std::size_t overlaps = inside[b].size();
-        out.push_back(SetEntry(scene, b).at("shape") + ": " + named.str() +
-                      (overlaps > kNamedOverlaps ? "; and inside " + std::to_string(overlaps - kNamedOverlaps) + " more sets"
-                                                 : std::string()) +
-                      ": " + (overlaps > 1 ? "they are" : "both are") + " emitted into the same space");
+        out.push_back(
+            SetEntry(scene, b).at("shape") + ": " + named.str() +
+            (overlaps > kNamedOverlaps ? "; and inside " + std::to_string(overlaps - kNamedOverlaps) + " more sets"
+                                       : std::string()) +
+            ": " + (overlaps > 1 ? "they are" : "both are") +
+            " emitted into the same space, which then holds both masses; move or shrink one, or start them at different "
+            "frames");
     }
 }
 
