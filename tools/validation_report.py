@@ -28,6 +28,11 @@ def read(path):
         return list(csv.DictReader(f))
 
 
+def cell(text):
+    """A table cell: a metric's |x| would otherwise end the cell."""
+    return text.replace("|", "\\|")
+
+
 def accuracy_section(rows, out_dir):
     lines = ["## Error against run time", ""]
     if not rows:
@@ -57,7 +62,7 @@ def accuracy_section(rows, out_dir):
                 applies = int(r["level"]) >= int(r["pass_level"])
                 verdict = ("pass" if r["pass"] == "1" else "**fail**") if applies else "(coarser than band)"
                 lines.append("| %s | %s | %s | %s | %.4g | %s | %.2f | %.3g | %s | %s |" % (
-                    case, r["metric"] if (choice == "baseline" and i == 0) else "", r["band"] if (choice == "baseline" and i == 0) else "",
+                    case, cell(r["metric"]) if (choice == "baseline" and i == 0) else "", cell(r["band"]) if (choice == "baseline" and i == 0) else "",
                     choice, float(r["dx"]), r["particles"], float(r["wall_seconds"]), float(r["error"]), order, verdict))
             finest = rs[-1]
             if choice == "baseline":
@@ -73,7 +78,7 @@ def accuracy_section(rows, out_dir):
     head = ["### Verdict (baseline choice, finest level)", "", "| case | error | band | verdict | detail |", "|---|---|---|---|---|"]
     for case, r, applies in summary:
         verdict = ("pass" if r["pass"] == "1" else "**fail**") if applies else "not reached (band needs a finer level)"
-        head.append("| %s | %.3g | %s | %s | %s |" % (case, float(r["error"]), r["band"], verdict, r["detail"].replace(";", ", ")))
+        head.append("| %s | %.3g | %s | %s | %s |" % (case, float(r["error"]), cell(r["band"]), verdict, cell(r["detail"].replace(";", ", "))))
     plots = ["", "Plots: " + ", ".join("[%s](accuracy_%s.png)" % (c, c) for c in by_case), ""]
     return lines[:2] + head + plots + lines[2:] + [""]
 
