@@ -514,7 +514,7 @@ TEST(ContinuousSource, BadStreamsAreNamedErrors) {
 TEST(SceneWarnings, ValidateBuildsEachMeshSetsFieldOnceAndSamplesAsARunDoes) {
     const std::string dir = tempDir("cache");
     const std::string torus = std::string(MPM_SOURCE_DIR) + "/scenes/assets/torus.obj";
-    const std::string text = R"({"simulation": {"frames": 1, "dx": 0.01},
+    const std::string text = R"({"simulation": {"frames": 1, "dx": 0.02},
         "sets": [{"name": "a", "material": "jelly", "shape": {"type": "mesh", "file": ")" +
                              torus + R"(",
                   "transform": {"scale": 0.1, "translate": [0, 0.3, 0]}}},
