@@ -640,20 +640,15 @@ void SetCache::extent(std::size_t i, double& volume, Vec3d& lo, Vec3d& hi) {
 
 const SetSamples& SetCache::samples(std::size_t i) {
     std::optional<SetSamples>& kept = impl_->samples[i];
-    if (kept) return *kept;
-    const SetEntry set(impl_->scene, i);
-    if (std::holds_alternative<PointsShape>(set.desc().shape)) return kept.emplace(sampleSet(set));
-    const SetRegionIn r = impl_->region(i);
-    kept.emplace(sampleSetShape(set, SamplePart{}, &r));
-    addInitialVelocities(set, *kept, Comm::single());
-    return *kept;
+    return kept ? *kept : kept.emplace(samplesOf(impl_->scene, i));
 }
 
 SetSamples SetCache::samplesOf(const SceneDesc& variant, std::size_t i) {
     const SetEntry set(variant, i);
-    if (std::holds_alternative<PointsShape>(set.desc().shape)) return sampleSet(set);
-    const SetRegionIn r = impl_->region(i);
-    SetSamples out = sampleSetShape(set, SamplePart{}, &r);
+    // A point cloud has no region: its file is read as sampleSet reads it.
+    std::optional<SetRegionIn> region;
+    if (!std::holds_alternative<PointsShape>(set.desc().shape)) region = impl_->region(i);
+    SetSamples out = sampleSetShape(set, SamplePart{}, region ? &*region : nullptr);
     addInitialVelocities(set, out, Comm::single());
     return out;
 }

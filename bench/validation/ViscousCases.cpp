@@ -198,9 +198,11 @@ CaseResult mudSlump(const CaseConfig& c) {
         const double before = top() + offset;
         wall += runUntil(sim, kEnd);
         height[k] = top() + offset;
-        const double ratio = std::sqrt(3.0) * sp.params.yieldStress / (sp.params.density * kGravity * kH0);
-        pashias[k] = kH0 * ratio * (1.0 - std::log(ratio));
-        tresca[k] = kH0 * 2.0 * share * (1.0 - std::log(2.0 * share));
+        // H = H0 Y (1 - ln Y), Y the column's uniaxial yield stress over rho g H0: sqrt(3) tau_y (von Mises), 2 tau_y (Tresca).
+        const auto pashiasHeight = [&](double y) { return kH0 * y * (1.0 - std::log(y)); };
+        const double yieldShare = double(sp.params.yieldStress) / (sp.params.density * kGravity * kH0);
+        pashias[k] = pashiasHeight(std::sqrt(3.0) * yieldShare);
+        tresca[k] = pashiasHeight(2.0 * yieldShare);
         worst = std::max(worst, std::abs(height[k] / pashias[k] - 1.0));
         creep = std::max(creep, (before - height[k]) / kLast);
     }
