@@ -2,6 +2,7 @@
 // (materials/HerschelBulkley.h) in flows with closed-form answers, set up as a user would (lattice sampling at the
 // default particles per cell, the default shear modulus, released at rest or with the flow's own velocity).
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -216,6 +217,65 @@ CaseResult mudSlump(const CaseConfig& c) {
                       {"top_creep_last_quarter_second", creep}}));
 }
 
+// 18. A Bingham layer stopping on an incline (the inclined-plane test of Coussot and Boyer 1995, Rheol. Acta 34;
+// Liu and Mei 1989, Slow spreading of a sheet of Bingham fluid on an inclined plane, J. Fluid Mech. 207): a layer
+// twice the critical thickness h_c = tau_y / (rho g sin theta) (0.1 m, theta = 20 degrees, K = 20 Pa s), 0.4 m
+// long in a slab between slip planes, released on a sticky grid-aligned floor with gravity tilted. It runs
+// downhill, thins and must stop where its basal shear stress rho g h (sin theta - cos theta dh/dx) (the long-wave
+// balance) has fallen to tau_y. The thickness is measured from mass, not from the top: each cell-wide strip's
+// particle volume V0 det F_E over its width and the slab's depth, fitted with a line over the middle third of the
+// deposit. Error: the fit's middle thickness against h_c / (1 - cot theta dh/dx), the thickness at yield under the
+// fitted slope; the layer must also have stopped (thinned by under 1% of h_c a second over the last half second).
+CaseResult binghamIncline(const CaseConfig& c) {
+    constexpr double kEnd = 5.0, kLast = 0.5;
+    Setup s = load("bingham_incline", c);
+    Simulation& sim = *s.sim;
+    auto& sp = only<HerschelBulkley>(sim);
+    const HerschelBulkley::Params& m = sp.params;
+    const Vec3d g = s.scene.settings.gravity;
+    const double theta = std::atan2(g[0], -g[1]), gravity = g.norm();
+    const double hc = m.yieldStress / (m.density * gravity * std::sin(theta));
+    const Box& layer = std::get<Box>(s.scene.sets.at(0).shape);
+    const double depth = layer.max[2] - layer.min[2], strip = sim.settings().dx;
+    // Thickness of each strip along x, from the particles' current volumes.
+    const auto profile = [&] {
+        std::map<long, double> volume;
+        for (std::size_t i = 0; i < sp.size(); ++i)
+            volume[long(std::floor(sp.p.x[i][0] / strip))] += sp.p.volume0[i] * sp.state.Fe[i].determinant();
+        std::vector<double> x, h;
+        for (const auto& [b, v] : volume) x.push_back((double(b) + 0.5) * strip), h.push_back(v / (strip * depth));
+        return std::pair{x, h};
+    };
+    // The middle third of the deposit (strips at least a quarter of h_c thick, the spray and toe left out).
+    const auto middle = [&] {
+        auto [x, h] = profile();
+        double lo = 1e30, hi = -1e30;
+        for (std::size_t k = 0; k < x.size(); ++k)
+            if (h[k] > 0.25 * hc) lo = std::min(lo, x[k]), hi = std::max(hi, x[k]);
+        std::vector<double> xm, hm;
+        for (std::size_t k = 0; k < x.size(); ++k)
+            if (x[k] > lo + (hi - lo) / 3 && x[k] < hi - (hi - lo) / 3) xm.push_back(x[k]), hm.push_back(h[k]);
+        const auto [slope, intercept] = fitLine(xm, hm);
+        const double centre = 0.5 * (lo + hi);
+        return std::array<double, 4>{slope * centre + intercept, slope, lo, hi};
+    };
+    double wall = runUntil(sim, kEnd - kLast);
+    const double before = middle()[0];
+    wall += runUntil(sim, kEnd);
+    const auto [h, slope, tail, front] = middle();
+    const double atYield = hc / (1.0 - slope / std::tan(theta)), error = std::abs(h / atYield - 1.0);
+    const double thinning = (before - h) / kLast;
+    constexpr double kStoppedShare = 0.01;  // of h_c a second
+    return finish(sim, wall, error, error < 0.05 && std::abs(thinning) < kStoppedShare * hc,
+                  kv({{"thickness", h},
+                      {"h_c", hc},
+                      {"thickness_over_h_c", h / hc},
+                      {"surface_slope", slope},
+                      {"at_yield", atYield},
+                      {"deposit_length", front - tail},
+                      {"thinning_per_second", thinning}}));
+}
+
 }  // namespace
 
 void addViscousCases(std::vector<ValidationCase>& v) {
@@ -235,6 +295,8 @@ void addViscousCases(std::vector<ValidationCase>& v) {
     }
     v.push_back({"mud_slump", "|height at 3 s / Pashias's - 1| (von Mises form), worse of tau_y / (rho g H0) = 0.10, 0.15",
                  "< 10% at H0/dx >= 10", 0, 1, 0, mudSlump});
+    v.push_back({"bingham_incline", "|deposit thickness / the long-wave thickness at yield - 1|, middle third at 5 s",
+                 "< 5% at h_c/dx >= 10, and stopped (thinning under 1% of h_c a second)", 0, 1, 0, binghamIncline});
 }
 
 }  // namespace mpm::validation::support
