@@ -189,25 +189,30 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
     return kExitOk;
 }
 
-int validate(const std::string& scenePath, bool strict, bool printScene) {
+int validate(const std::string& scenePath, bool strict, bool printScene, int threadOption) {
     const SceneDesc scene = loadScene(scenePath);
+    // The report goes to standard output, unless the resolved scene takes it; warnings, errors and progress to
+    // standard error, so `mpm validate SCENE > report.txt` keeps the report and still shows what is wrong.
+    std::FILE* report = printScene ? stderr : stdout;
     // Each set sampled, and each file set's distance field built, once for the estimate and the warnings.
     SetCache sets(scene);
     sets.note = [](const std::string& what) { std::fprintf(stderr, "mpm: %s\n", what.c_str()); };
     SceneBudget budget = estimateBudget(scene, true, 1, &sets);
     // The run time from costs measured here, on the threads the run takes by default.
     if (budget.problems.empty()) {
-        const int threads = scene.threads > 0 ? scene.threads : int(std::thread::hardware_concurrency());
+        const int threads = threadOption > 0    ? threadOption
+                            : scene.threads > 0 ? scene.threads
+                                                : int(std::thread::hardware_concurrency());
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
         estimateRunTime(scene, budget);
     }
     // The summary first; the scene with every default stated (what a run writes as scene.json) when asked for.
-    if (printScene) std::cout << resolvedWithDerived(scene, deriveValues(scene)) << "\n";
-    std::fprintf(stderr, "%s", describeBudget(budget).c_str());
+    if (printScene) std::cout << resolvedWithDerived(scene, deriveValues(scene)) << std::endl;
+    std::fprintf(report, "%s", describeBudget(budget).c_str());
     checkBudget(scene, budget);
     std::vector<std::string> bodies;
     std::vector<std::string> warnings = sceneWarnings(scene, &bodies, &sets);
-    for (const std::string& b : bodies) std::fprintf(stderr, "%s\n", b.c_str());
+    for (const std::string& b : bodies) std::fprintf(report, "%s\n", b.c_str());
     // A scene far larger than meant (sizes in other units: a radius of 2 m for 2 cm) shows first as a run of hours.
     constexpr double kLongRun = 3600.0;
     if (budget.runSeconds > kLongRun) {
@@ -218,13 +223,14 @@ int validate(const std::string& scenePath, bool strict, bool printScene) {
           << " frames); if that is more than meant, check the shapes' sizes and dx are in metres (a radius of 2 is 2 m)";
         warnings.insert(warnings.begin(), w.str());
     }
+    std::fflush(report);
     for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     if (strict && !warnings.empty()) {
         std::fprintf(stderr, "error: %s: %zu warning%s, and --strict makes them errors\n", scenePath.c_str(), warnings.size(),
                      warnings.size() == 1 ? "" : "s");
         return kExitBadInput;
     }
-    std::fprintf(stderr, "%s: valid (%zu particle set%s)\n", scenePath.c_str(), scene.sets.size(),
+    std::fprintf(report, "%s: valid (%zu particle set%s)\n", scenePath.c_str(), scene.sets.size(),
                  scene.sets.size() == 1 ? "" : "s");
     return kExitOk;
 }
@@ -308,7 +314,12 @@ int cli(int argc, char** argv) {
                           "exit 2 on warnings too (a tiny set, a set inside a collider, overlapping sets, thin mesh walls, a set "
                           "after the last frame)");
     validateCmd->add_flag("--print-scene", printScene,
-                          "print the scene with every default stated (as a run writes it to scene.json) on standard output");
+                          "print the scene with every default stated (as a run writes it to scene.json) on standard output "
+                          "(the report then goes to standard error)");
+    validateCmd
+        ->add_option("--threads", threads,
+                     "the threads the run will take, for its time estimate (default: the scene's, else all cores)")
+        ->check(CLI::Range(0, kMostThreads).description("0 .. 4096"));
 
     try {
         app.parse(argc, argv);
@@ -323,7 +334,7 @@ int cli(int argc, char** argv) {
                 return kExitOk;
             }
             if (scenePath.empty()) throw SceneError("validate: give a scene file, or --explain");
-            return validate(scenePath, strict, printScene);
+            return validate(scenePath, strict, printScene, threads);
         }
         RunOptions options;
         options.outDir = outDir;

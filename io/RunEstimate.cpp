@@ -1,8 +1,10 @@
 #include "io/RunEstimate.h"
 
+#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <sstream>
@@ -101,7 +103,10 @@ void estimateRunTime(const SceneDesc& scene, SceneBudget& budget) {
     const double simulate = substeps * step.fixed + budget.particleSubsteps * step.perParticle;
     const double writing = frames * write.fixed + particleFrames * write.perParticle;
     budget.runSeconds = simulate + writing;
-    const int threads = tbb::this_task_arena::max_concurrency();
+    // The threads the costs were measured on: the arena's, under the caller's global_control limit (validate's --threads).
+    const int threads =
+        int(std::min<std::size_t>(std::size_t(tbb::this_task_arena::max_concurrency()),
+                                  tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
     budget.runBasis = fewDigits(substeps) + " substeps, " + fewDigits(budget.particleSubsteps) + " particle-substeps and " +
                       fewDigits(frames) + " frames written, at costs measured now on water on " + std::to_string(threads) +
                       " thread" + (threads == 1 ? "" : "s") + ": " + fewDigits(simulate) + " s simulating, " +

@@ -432,4 +432,13 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     const Result plain = runMpm("validate " + scene), printed = runMpm("validate --print-scene " + scene);
     EXPECT_EQ(plain.output.find("\"simulation\""), std::string::npos) << plain.output;
     EXPECT_NE(printed.output.find("\"simulation\""), std::string::npos) << printed.output;
+    // The report on standard output, to be kept in a file; with --print-scene standard output is the scene alone,
+    // JSON that parses. --threads sets the threads the run-time estimate is measured on.
+    const Result report = runShell("(" + std::string(MPM_BINARY) + " validate --threads 1 " + scene + " 2>/dev/null)");
+    EXPECT_NE(report.output.find(": valid (1 particle set)"), std::string::npos) << report.output;
+    EXPECT_NE(report.output.find("on water on 1 thread:"), std::string::npos) << report.output;
+    const Result json = runShell("(" + std::string(MPM_BINARY) + " validate --print-scene " + scene + " 2>/dev/null)");
+    EXPECT_EQ(json.code, 0);
+    EXPECT_TRUE(nlohmann::json::accept(json.output)) << json.output;
+    EXPECT_EQ(runMpm("validate --threads -1 " + scene).code, 2);
 }
