@@ -163,9 +163,9 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
                                        std::to_string(firstWritten) + " not written)"
                                  : std::string();
     if (!quiet)
-        std::fprintf(stderr, "mpm: %s, frames %d to %d%s at %g fps, dx %g m, %d rank%s x %d threads -> %s\n", scenePath.c_str(),
+        std::fprintf(stderr, "mpm: %s, frames %d to %d%s at %g fps, dx %g m, %d rank%s x %d thread%s -> %s\n", scenePath.c_str(),
                      firstWritten, job.lastFrame(), from.c_str(), job.scene().settings.fps, job.scene().settings.dx, comm.size(),
-                     comm.size() == 1 ? "" : "s", nThreads, job.directory().c_str());
+                     comm.size() == 1 ? "" : "s", nThreads, nThreads == 1 ? "" : "s", job.directory().c_str());
     try {
         job.run(&gStopSignal);
     } catch (const Interrupted&) {
@@ -206,8 +206,6 @@ int validate(const std::string& scenePath, bool strict, bool printScene, int thr
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
         estimateRunTime(scene, budget);
     }
-    // The summary first; the scene with every default stated (what a run writes as scene.json) when asked for.
-    if (printScene) std::cout << resolvedWithDerived(scene, deriveValues(scene)) << std::endl;
     std::fprintf(report, "%s", describeBudget(budget).c_str());
     checkBudget(scene, budget);
     std::vector<std::string> bodies;
@@ -230,6 +228,9 @@ int validate(const std::string& scenePath, bool strict, bool printScene, int thr
                      warnings.size() == 1 ? "" : "s");
         return kExitBadInput;
     }
+    // The scene with every default stated (what a run writes as scene.json) when asked for, and only for a scene
+    // that passed: a script reading it must not take a rejected scene's.
+    if (printScene) std::cout << resolvedWithDerived(scene, deriveValues(scene)) << std::endl;
     std::fprintf(report, "%s: valid (%zu particle set%s)\n", scenePath.c_str(), scene.sets.size(),
                  scene.sets.size() == 1 ? "" : "s");
     return kExitOk;

@@ -441,4 +441,11 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     EXPECT_EQ(json.code, 0);
     EXPECT_TRUE(nlohmann::json::accept(json.output)) << json.output;
     EXPECT_EQ(runMpm("validate --threads -1 " + scene).code, 2);
+    // A scene --strict rejects prints no scene.
+    const std::string tinySet = sceneFile("tiny_strict.json", R"({"sets":[{"material":"water","count":20,
+        "shape":{"type":"sphere","center":[0,0,0],"radius":0.05}}]})");
+    const Result rejected =
+        runShell("(" + std::string(MPM_BINARY) + " validate --strict --print-scene " + tinySet + " 2>/dev/null)");
+    EXPECT_EQ(rejected.code, 2);
+    EXPECT_EQ(rejected.output.find("\"simulation\""), std::string::npos) << rejected.output;
 }
