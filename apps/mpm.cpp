@@ -198,7 +198,7 @@ int validate(const std::string& scenePath, bool strict, bool printScene, int thr
     SetCache sets(scene);
     sets.note = [](const std::string& what) { std::fprintf(stderr, "mpm: %s\n", what.c_str()); };
     SceneBudget budget = estimateBudget(scene, true, 1, &sets);
-    // The run time from costs measured here, on the threads the run takes by default.
+    // The run time from costs measured here, on the threads the run will take (--threads, the scene's, all cores).
     if (budget.problems.empty()) {
         const int threads = threadOption > 0    ? threadOption
                             : scene.threads > 0 ? scene.threads
