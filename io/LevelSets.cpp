@@ -89,9 +89,7 @@ double meshFieldBytes(const TriangleMesh& mesh, double voxelSize, double bandWid
     // the band is wide against the mesh (a shell 1 m thick round a 40 cm blade: ten times the area term); at most
     // the mesh's box grown by the band.
     const double area = mesh.area(), r = 0.5 * bandWidth;
-    Eigen::AlignedBox3d box;
-    for (const Vec3d& p : mesh.points) box.extend(p);
-    const Vec3d size = mesh.points.empty() ? Vec3d::Zero() : Vec3d(box.sizes());
+    const Vec3d size = mesh.points.empty() ? Vec3d::Zero() : Vec3d(mesh.bounds().sizes());
     const double grownBox = (size.array() + bandWidth).prod();
     const double band = std::min(grownBox, area * bandWidth + M_PI * r * r * size.norm() + 4.0 / 3.0 * M_PI * r * r * r);
     const auto nodes = [&](double dim, double atLeast) {

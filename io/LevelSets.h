@@ -26,6 +26,12 @@ struct TriangleMesh {
     std::size_t openEdges() const;
     /// The surface's area [m^2 in the points' units].
     double area() const;
+    /// The points' axis-aligned box (empty for no points).
+    Eigen::AlignedBox3d bounds() const {
+        Eigen::AlignedBox3d box;
+        for (const Vec3d& p : points) box.extend(p);
+        return box;
+    }
 };
 
 /// Reads every mesh of a file into one, welding corners at equal positions.

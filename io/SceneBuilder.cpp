@@ -175,9 +175,7 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
                          std::to_string(open) + " of its edges border one triangle only");
     if (notes) {
         // The centre of the mesh's own box: exact, where the field's box is rounded to voxels and wider by its band.
-        Eigen::AlignedBox3d box;
-        for (const Vec3d& p : f.mesh.points) box.extend(p);
-        notes->centre = box.center();
+        notes->centre = f.mesh.bounds().center();
         notes->voxel = f.voxel;
         if (place && !resolves(f.voxel, f.wall.thinnest)) notes->warning = thinWallWarning(scene, where, m, f);
         if (notes->keepMesh) notes->mesh = f.mesh;
@@ -378,10 +376,9 @@ std::unique_ptr<Collider> colliderOf(const ColliderEntry& collider, Vec3d* pivot
                     }
                     if (warnings && !notes.warning.empty()) warnings->push_back(notes.warning);
                     if (voxel) *voxel = notes.voxel;
-                    Eigen::AlignedBox3d box;
-                    for (const Vec3d& p : notes.mesh.points) box.extend(p);
-                    const MassProperties props = polyhedronMassProperties(notes.mesh.points, notes.mesh.triangles,
-                                                                          box.sizes().maxCoeff() / kMeshContactSamplesPerSide);
+                    const MassProperties props =
+                        polyhedronMassProperties(notes.mesh.points, notes.mesh.triangles,
+                                                 notes.mesh.bounds().sizes().maxCoeff() / kMeshContactSamplesPerSide);
                     if (!(props.volume > 0.0))
                         throw SceneError(at + "/file: " + shape.file + ": the " + S::kType +
                                          " encloses no volume to be a rigid body of");

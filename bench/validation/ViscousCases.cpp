@@ -2,7 +2,6 @@
 // (materials/HerschelBulkley.h) in flows with closed-form answers, set up as a user would (lattice sampling at the
 // default particles per cell, the default shear modulus, released at rest or with the flow's own velocity).
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -246,7 +245,11 @@ CaseResult binghamIncline(const CaseConfig& c) {
         for (const auto& [b, v] : volume) x.push_back((double(b) + 0.5) * strip), h.push_back(v / (strip * depth));
         return std::pair{x, h};
     };
-    // The middle third of the deposit (strips at least a quarter of h_c thick, the spray and toe left out).
+    // The middle third of the deposit (strips at least a quarter of h_c thick, the spray and toe left out): the
+    // fitted line's thickness at the deposit's centre, its slope, and the deposit's ends.
+    struct Deposit {
+        double thickness, slope, tail, front;
+    };
     const auto middle = [&] {
         auto [x, h] = profile();
         double lo = 1e30, hi = -1e30;
@@ -257,10 +260,10 @@ CaseResult binghamIncline(const CaseConfig& c) {
             if (x[k] > lo + (hi - lo) / 3 && x[k] < hi - (hi - lo) / 3) xm.push_back(x[k]), hm.push_back(h[k]);
         const auto [slope, intercept] = fitLine(xm, hm);
         const double centre = 0.5 * (lo + hi);
-        return std::array<double, 4>{slope * centre + intercept, slope, lo, hi};
+        return Deposit{slope * centre + intercept, slope, lo, hi};
     };
     double wall = runUntil(sim, kEnd - kLast);
-    const double before = middle()[0];
+    const double before = middle().thickness;
     wall += runUntil(sim, kEnd);
     const auto [h, slope, tail, front] = middle();
     const double atYield = hc / (1.0 - slope / std::tan(theta)), error = std::abs(h / atYield - 1.0);
