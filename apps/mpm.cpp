@@ -4,10 +4,14 @@
 // mpirun, SIGUSR1 is the one to send: OpenMPI forwards it to every rank, while SIGINT and SIGTERM make it
 // kill the ranks after a second.
 #include <tbb/global_control.h>
+#include <tbb/info.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
+#include <tbb/info.h>
+
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -15,11 +19,11 @@
 #include <memory>
 #include <new>
 #include <sstream>
-#include <thread>
 
 #include "io/AtomicFile.h"
 #include "io/Checkpoint.h"
 #include "io/DirectoryLock.h"
+#include "io/Output.h"
 #include "io/Run.h"
 #include "io/RunEstimate.h"
 #include "io/SceneBudget.h"
@@ -48,6 +52,20 @@ extern "C" void onStopSignal(int sig) {
         return;
     }
     gStopSignal.store(sig);
+}
+
+/// The worker threads a run takes: those asked for (`--threads`, else the scene's `simulation.threads`; 0 or none:
+/// all), at most the ones this process can run at once (TBB's default concurrency: the cores, or fewer where an
+/// affinity mask or a control group limits them). More would only be queued, so asking for more is worth a word.
+int threadsTaken(int option, int sceneThreads, std::vector<std::string>& warnings) {
+    const int available = std::max(1, tbb::info::default_concurrency());
+    const int asked = option > 0 ? option : sceneThreads;
+    if (asked <= 0) return available;
+    if (asked > available)
+        warnings.push_back(std::string(option > 0 ? "--threads " : "simulation.threads ") + std::to_string(asked) +
+                           " is more than the " + std::to_string(available) + " this process can run at once; the run takes " +
+                           std::to_string(available));
+    return std::min(asked, available);
 }
 
 void installStopHandlers() {
@@ -121,12 +139,14 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
         if (!quiet) std::fprintf(stderr, "mpm: %s\n", s.c_str());
     };
     events.warning = [&](const std::string& s) {
-        if (speaks) std::fprintf(stderr, "mpm: warning: %s\n", s.c_str());
+        if (speaks) std::fprintf(stderr, "warning: %s\n", s.c_str());
     };
     events.frameDone = [&](int f, int last, const FrameStats& st, double w) { progress.frame(f, last, st, w); };
     // The scene's thread count is known only once it is read; the limit must be in place before any work.
     const SceneDesc peek = loadScene(scenePath);
-    const int nThreads = threads > 0 ? threads : peek.threads > 0 ? peek.threads : int(std::thread::hardware_concurrency());
+    std::vector<std::string> threadWarnings;
+    const int nThreads = threadsTaken(threads, peek.threads, threadWarnings);
+    for (const std::string& w : threadWarnings) events.warning(w);
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nThreads));
     installStopHandlers();
     events.stop = &gStopSignal;
@@ -199,10 +219,9 @@ int validate(const std::string& scenePath, bool strict, bool printScene, int thr
     sets.note = [](const std::string& what) { std::fprintf(stderr, "mpm: %s\n", what.c_str()); };
     SceneBudget budget = estimateBudget(scene, true, 1, &sets);
     // The run time from costs measured here, on the threads the run will take (--threads, the scene's, all cores).
+    std::vector<std::string> threadWarnings;
+    const int threads = threadsTaken(threadOption, scene.threads, threadWarnings);
     if (budget.problems.empty()) {
-        const int threads = threadOption > 0    ? threadOption
-                            : scene.threads > 0 ? scene.threads
-                                                : int(std::thread::hardware_concurrency());
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
         estimateRunTime(scene, budget);
     }
@@ -210,6 +229,7 @@ int validate(const std::string& scenePath, bool strict, bool printScene, int thr
     checkBudget(scene, budget);
     std::vector<std::string> bodies;
     std::vector<std::string> warnings = sceneWarnings(scene, &bodies, &sets);
+    warnings.insert(warnings.end(), threadWarnings.begin(), threadWarnings.end());
     for (const std::string& b : bodies) std::fprintf(report, "%s\n", b.c_str());
     // A scene far larger than meant (sizes in other units: a radius of 2 m for 2 cm) shows first as a run of hours.
     constexpr double kLongRun = 3600.0;
@@ -230,7 +250,7 @@ int validate(const std::string& scenePath, bool strict, bool printScene, int thr
     }
     // The scene with every default stated (what a run writes as scene.json) when asked for, and only for a scene
     // that passed: a script reading it must not take a rejected scene's.
-    if (printScene) std::cout << resolvedWithDerived(scene, deriveValues(scene)) << std::endl;
+    if (printScene) std::cout << withSceneFile(resolvedWithDerived(scene, deriveValues(scene)), scene.file) << std::endl;
     std::fprintf(report, "%s: valid (%zu particle set%s)\n", scenePath.c_str(), scene.sets.size(),
                  scene.sets.size() == 1 ? "" : "s");
     return kExitOk;
@@ -298,8 +318,18 @@ int cli(int argc, char** argv) {
     runCmd->add_option("scene", scenePath, "scene file (JSON)")->required();
     runCmd->add_option("-o,--output", outDir, "output directory (default: the scene's output.directory)");
     constexpr int kMostThreads = 4096;  // as simulation.threads allows
+    // A whole number in range, checked on the text: CLI11's Range alone calls "abc" a value out of range.
+    const CLI::Validator threadCount(
+        [](std::string& text) -> std::string {
+            int n = 0;
+            const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+            if (ec == std::errc() && end == text.data() + text.size() && n >= 0 && n <= kMostThreads) return "";
+            return "'" + text + "' is not a thread count; allowed: a whole number 0 .. " + std::to_string(kMostThreads) +
+                   " (0: the scene's, else all cores)";
+        },
+        "0 .. 4096");
     runCmd->add_option("--threads", threads, "worker threads, 0 .. 4096 (default: the scene's, else all cores)")
-        ->check(CLI::Range(0, kMostThreads).description("0 .. 4096"));
+        ->check(threadCount);
     runCmd->add_option("--frames", frames,
                        "write only frames A:B (nothing else is deleted; starts from a checkpoint before A when there is one)");
     runCmd->add_flag("--resume", resume, "continue from the newest valid checkpoint in the output directory");
@@ -320,7 +350,7 @@ int cli(int argc, char** argv) {
     validateCmd
         ->add_option("--threads", threads,
                      "the threads the run will take, for its time estimate (default: the scene's, else all cores)")
-        ->check(CLI::Range(0, kMostThreads).description("0 .. 4096"));
+        ->check(threadCount);
 
     try {
         app.parse(argc, argv);

@@ -129,13 +129,16 @@ FrameWriter::FrameWriter(const SceneDesc& scene, const SpeciesLayout& layout, co
     if (ec) throw WriteError(dir_, "cannot create the output directory: " + ec.message());
     csv_ = statsSoFar.empty() ? FrameStats::csvHeader(bodies_) + "\n" : statsSoFar;
     writeStats();
-    // The resolved scene, and where it came from: its asset paths are relative to that file (the render
-    // tool finds the colliders' meshes through it). Not part of the scene's identity.
-    nlohmann::ordered_json resolved = nlohmann::ordered_json::parse(scene.resolvedJson);
+    // The resolved scene, and where it came from (the render tool finds the colliders' meshes through it).
+    writeTextAtomically(dir_ + "/scene.json", withSceneFile(scene.resolvedJson, scene.file) + "\n");
+}
+
+std::string withSceneFile(const std::string& resolvedJson, const std::string& file) {
+    nlohmann::ordered_json resolved = nlohmann::ordered_json::parse(resolvedJson);
     std::error_code absError;
-    const std::filesystem::path source = std::filesystem::absolute(scene.file, absError);
-    resolved["scene_file"] = absError ? scene.file : source.lexically_normal().string();
-    writeTextAtomically(dir_ + "/scene.json", resolved.dump(2) + "\n");
+    const std::filesystem::path source = std::filesystem::absolute(file, absError);
+    resolved["scene_file"] = absError ? file : source.lexically_normal().string();
+    return resolved.dump(2);
 }
 
 std::string FrameWriter::framePath(int frame, const char* suffix, const char* ext) const {

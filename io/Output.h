@@ -66,6 +66,11 @@ private:
 /// is body k's index in the scene's collider list, `names[k]` its collider's name.
 std::string bodiesCsv(const std::string& statsCsv, const std::vector<int>& colliders, const std::vector<std::string>& names);
 
+/// A resolved scene's JSON (every default stated) with `scene_file`, the absolute path of the scene `file` it came
+/// from, as a run's scene.json and `mpm validate --print-scene` give it: run from anywhere, it finds its assets
+/// beside that file and names its frames after it. Not part of the scene's identity.
+std::string withSceneFile(const std::string& resolvedJson, const std::string& file);
+
 /// The rows of a stats.csv by frame, the header left out (an empty map for a missing or empty file).
 std::map<int, std::string> statsRows(const std::string& csv);
 

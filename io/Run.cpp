@@ -180,9 +180,11 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     for (const std::string& w : derived.warnings) events_.warning(w);
     // From here the scene is the one that runs: every default stated, the pivots the builder derived included.
     scene_.resolvedJson = resolvedWithDerived(scene_, derived);
+    long long dueAtStart = 0;  // of the samples held here: those of the sets emitted at frame 0
     for (const Emitter& e : sim_->emitters()) {
         heldSamples_ += (long long)e.positions.size();
         setSamples_ += e.holdsPart() ? e.total : (long long)e.positions.size();
+        if (e.emitsAt(0)) dueAtStart += (long long)e.positions.size();
     }
     layout_ = speciesLayout(scene_);
     identity_ = sceneIdentity(scene_.resolvedJson);
@@ -192,7 +194,10 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
                                      ? "reading the newest checkpoint before frame " + std::to_string(options_.firstFrame) +
                                            " of " + dir_ + ", or else emitting the sets due at the start"
                                      : "emitting the sets due at the start";
-    events_.note(starting + " (" + std::to_string(heldSamples_) + " particles sampled)");
+    events_.note(starting + " (" + std::to_string(dueAtStart) + " particles" +
+                 (dueAtStart == heldSamples_ ? std::string()
+                                             : "; " + std::to_string(heldSamples_) + " sampled for every set's emissions") +
+                 ")");
     guarded(starting, [&] { chooseStart(); });
     onRoot(comm, [&] {
         // Part of a scene (--frames A:B): the rows of the other frames stay as the earlier runs wrote them.

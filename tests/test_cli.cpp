@@ -408,6 +408,27 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     const Result threads = runMpm("run " + scene + " --threads abc");
     EXPECT_EQ(threads.code, 2);
     EXPECT_LT(threads.output.size(), 200u) << threads.output;  // no 300-digit range
+    EXPECT_NE(threads.output.find("'abc' is not a thread count"), std::string::npos) << threads.output;
+    // More threads than this process can run at once: said, and the run reports the ones it takes (no machine
+    // running this has 4096 cores).
+    const Result many = runMpm("run " + scene + " --threads 4096 -o " + scene + "_many");
+    EXPECT_EQ(many.code, 0) << many.output;
+    EXPECT_NE(many.output.find("warning: --threads 4096 is more than the "), std::string::npos) << many.output;
+    EXPECT_EQ(many.output.find("x 4096 threads"), std::string::npos) << many.output;
+    EXPECT_NE(runMpm("validate --threads 4096 " + scene).output.find("warning: --threads 4096 is more than the "),
+              std::string::npos);
+    // The particles the start emits are those the first frame has; a set that comes later is counted apart.
+    const Result late = runMpm("run " + sceneFile("late_set.json", R"({"simulation": {"frames": 1, "dx": 0.05},
+        "output": {"surface": false}, "sets": [{"shape": {"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}},
+        {"start_frame": 5, "shape": {"type": "box", "min": [0, 0.2, 0], "max": [0.2, 0.3, 0.1]}}]})") +
+                               " -o " + scene + "_late");
+    const auto numberAfter = [&](const std::string& key) {
+        const std::size_t at = late.output.find(key);
+        return at == std::string::npos ? -1L : std::atol(late.output.c_str() + at + key.size());
+    };
+    EXPECT_GT(numberAfter("due at the start ("), 0) << late.output;
+    EXPECT_EQ(numberAfter("due at the start ("), numberAfter(" particles ")) << late.output;
+    EXPECT_NE(late.output.find("sampled for every set's emissions"), std::string::npos) << late.output;
     const Result frames = runMpm("run " + scene + " --frames x");
     EXPECT_EQ(frames.code, 2);
     EXPECT_NE(frames.output.find("(for example 1:48)"), std::string::npos) << frames.output;
@@ -439,7 +460,10 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     EXPECT_NE(report.output.find("on water on 1 thread:"), std::string::npos) << report.output;
     const Result json = runShell("(" + std::string(MPM_BINARY) + " validate --print-scene " + scene + " 2>/dev/null)");
     EXPECT_EQ(json.code, 0);
-    EXPECT_TRUE(nlohmann::json::accept(json.output)) << json.output;
+    ASSERT_TRUE(nlohmann::json::accept(json.output)) << json.output;
+    // As a run's scene.json: it names the scene it came from, so that it finds its assets from anywhere.
+    EXPECT_EQ(nlohmann::json::parse(json.output).value("scene_file", std::string()),
+              std::filesystem::absolute(scene).lexically_normal().string());
     EXPECT_EQ(runMpm("validate --threads -1 " + scene).code, 2);
     // A scene --strict rejects prints no scene.
     const std::string tinySet = sceneFile("tiny_strict.json", R"({"sets":[{"material":"water","count":20,
