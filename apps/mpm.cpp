@@ -242,7 +242,7 @@ int validate(const std::string& scenePath, bool strict, bool printScene, int thr
         warnings.insert(warnings.begin(), w.str());
     }
     std::fflush(report);
-    for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    for (const std::string& w : summarisedWarnings(warnings)) std::fprintf(stderr, "warning: %s\n", w.c_str());
     if (strict && !warnings.empty()) {
         std::fprintf(stderr, "error: %s: %zu warning%s, and --strict makes them errors\n", scenePath.c_str(), warnings.size(),
                      warnings.size() == 1 ? "" : "s");

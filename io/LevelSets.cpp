@@ -82,14 +82,18 @@ double TriangleMesh::area() const {
 }
 
 double meshFieldBytes(const TriangleMesh& mesh, double voxelSize, double bandWidth) {
+    return surfaceFieldBytes(mesh.area(), mesh.points.empty() ? Vec3d::Zero() : Vec3d(mesh.bounds().sizes()), voxelSize,
+                             bandWidth);
+}
+
+double surfaceFieldBytes(double area, const Vec3d& size, double voxelSize, double bandWidth) {
     // Nodes of a tree level whose nodes span `dim` voxels: a band crosses about band / span + 1 of them, each
     // straddling the surface; and an object astride their boundaries takes up to 8 however small it is.
     // The band's volume by Steiner's formula for a body grown by r = bandWidth / 2 on each side: area times the
     // width, plus the edges' and corners' terms (pi r^2 along the mesh's diagonal, 4/3 pi r^3), which dominate when
     // the band is wide against the mesh (a shell 1 m thick round a 40 cm blade: ten times the area term); at most
     // the mesh's box grown by the band.
-    const double area = mesh.area(), r = 0.5 * bandWidth;
-    const Vec3d size = mesh.points.empty() ? Vec3d::Zero() : Vec3d(mesh.bounds().sizes());
+    const double r = 0.5 * bandWidth;
     const double grownBox = (size.array() + bandWidth).prod();
     const double band = std::min(grownBox, area * bandWidth + M_PI * r * r * size.norm() + 4.0 / 3.0 * M_PI * r * r * r);
     const auto nodes = [&](double dim, double atLeast) {
@@ -175,7 +179,7 @@ openvdb::GridBase::Ptr readVdbGrid(const std::string& path, const std::string& g
 }
 }  // namespace
 
-double vdbFieldBytes(const std::string& path, const std::string& gridName, double scale, double band) {
+double vdbFieldBytes(const std::string& path, const std::string& gridName, double scale, double band, double finestVoxel) {
     const openvdb::GridBase::Ptr meta = readVdbGrid(path, gridName, true);
     double bytes = double(std::filesystem::file_size(path));
     if (const auto recorded = meta->getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_MEM_BYTES))
@@ -188,6 +192,15 @@ double vdbFieldBytes(const std::string& path, const std::string& gridName, doubl
     const auto lo = meta->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MIN);
     const auto hi = meta->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MAX);
     if (lo && hi) widest = std::max(1.0, openvdb::Vec3d(hi->value() - lo->value()).length());
+    const auto count = meta->getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_VOXEL_COUNT);
+    if (voxel < finestVoxel && band > kNarrowestBandVoxels * voxel && lo && hi && count) {
+        // Remade at finestVoxel from its surface: the file's grid and the new field's, for a surface of the area the
+        // file's band covers at its usual width, in the box the band spans.
+        const double area = double(count->value()) / (2.0 * kNarrowestBandVoxels) * voxel * voxel;
+        const Vec3d size = voxel * Vec3d(double(hi->value()[0] - lo->value()[0]), double(hi->value()[1] - lo->value()[1]),
+                                         double(hi->value()[2] - lo->value()[2]));
+        return bytes + surfaceFieldBytes(area, size, finestVoxel, 2.0 * band);
+    }
     const double grownVoxels = std::min(band / voxel, kNarrowestBandVoxels + widest);
     return bytes * std::max(1.0, grownVoxels / kNarrowestBandVoxels);
 }
@@ -218,8 +231,32 @@ openvdb::FloatGrid::Ptr resampledAxisAligned(const openvdb::FloatGrid& in, doubl
     return out;
 }
 
+/// The level set `in` remade at `voxel` [m] through its zero crossing (volumeToMesh, not adaptive), with a band
+/// `band` [m] wide on each side. The surface is taken about the band's middle, so that its float points keep their
+/// precision far from the origin.
+openvdb::FloatGrid::Ptr remadeAtVoxel(const openvdb::FloatGrid& in, double voxel, double band) {
+    const openvdb::CoordBBox box = in.evalActiveVoxelBoundingBox();
+    const openvdb::Vec3d middle = in.indexToWorld(0.5 * (box.min().asVec3d() + box.max().asVec3d()));
+    auto local = in.transform().copy();
+    local->postTranslate(-middle);
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    std::vector<openvdb::Vec4I> quads;
+    openvdb::tools::volumeToMesh(*in.copyReplacingTransform(local), points, triangles, quads, 0.0);
+    auto xform = openvdb::math::Transform::createLinearTransform(voxel);
+    xform->postTranslate(-middle);
+    // The points are in the local frame, which this transform maps onto index space as the world's voxels of
+    // `voxel` would be: the field made is the world's, on the lattice through the origin.
+    const float width = float(std::max(3.0, band / voxel));
+    openvdb::FloatGrid::Ptr out =
+        openvdb::tools::meshToSignedDistanceField<openvdb::FloatGrid>(*xform, points, triangles, quads, width, width);
+    out->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+    out->setGridClass(openvdb::GRID_LEVEL_SET);
+    return out;
+}
+
 std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const std::string& gridName, double reach,
-                                                  const Placement& placement, double band) {
+                                                  const Placement& placement, double band, double finestVoxel) {
     const openvdb::GridBase::Ptr base = readVdbGrid(path, gridName);
     auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
     if (!grid)
@@ -251,7 +288,12 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
     }
     // The background is the band's half width in world units (a level set's convention), stored as a float.
     constexpr double kFloatRounding = 1e-6;
-    if (double(grid->background()) < band * (1.0 - kFloatRounding)) {
+    const bool narrow = double(grid->background()) < band * (1.0 - kFloatRounding);
+    if (narrow && vs[0] < finestVoxel * (1.0 - kFloatRounding)) {
+        // Remade at the coarser voxel from its surface, its band as wide as asked on both sides (deeper inside than
+        // the object is cannot cost more than the object's volume in those voxels).
+        grid = remadeAtVoxel(*grid, finestVoxel, band);
+    } else if (narrow) {
         // Extend the band by solving |grad phi| = 1 outward from it (fast sweeping), which keeps the values the file
         // has; a rebuild through a mesh would move them and break the field's symmetries.
         // No deeper than the object is wide: inside, no point lies deeper; outside, a band wider than the object is
@@ -269,9 +311,9 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
 }  // namespace
 
 std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName, double reach,
-                                            const Placement& placement, double band) {
+                                            const Placement& placement, double band, double finestVoxel) {
     try {
-        return placedVdbLevelSet(path, gridName, reach, placement, band);
+        return placedVdbLevelSet(path, gridName, reach, placement, band, finestVoxel);
     } catch (const openvdb::Exception& e) {
         // A placement OpenVDB cannot represent: a scale that makes the voxel too small for its maps, for one.
         std::ostringstream what;

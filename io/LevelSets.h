@@ -42,6 +42,8 @@ TriangleMesh readMesh(const std::string& path);
 /// distance and the conversion's closest-triangle index, and the tree's internal nodes above them. Known before
 /// building, so a mesh scaled or placed by mistake is refused with the estimate instead of exhausting memory.
 double meshFieldBytes(const TriangleMesh& mesh, double voxelSize, double bandWidth);
+/// The same for a surface of `area` [m^2] whose box has sides `size` [m].
+double surfaceFieldBytes(double area, const Vec3d& size, double voxelSize, double bandWidth);
 
 /// A closed mesh as a solid (thickness 0), or any mesh as a shell of half-thickness `thickness` around its
 /// surface. The band reaches `exteriorBand` outside the surface and `interiorBand` inside [m]; `reach` is the
@@ -54,15 +56,21 @@ std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std
 /// With a `placement`, the grid is moved there (its distances scaled with it). A band narrower than `band` [m]
 /// on either side of the surface (files made with 3 voxels, Houdini's default, at a voxel under a third of
 /// `band`) is grown to that width by OpenVDB's fast sweeping (dilateSdf): deeper, the field is flat and has no normal,
-/// and a node or particle there would not be held. 0: the band as the file has it.
+/// and a node or particle there would not be held. 0: the band as the file has it. A grid whose voxel is finer than
+/// `finestVoxel` [m] (0: any) and whose band must grow is remade at `finestVoxel` from its surface instead
+/// (volumeToMesh, then meshToSignedDistanceField, as a mesh collider is made): growing a band of a few grid cells
+/// in voxels far finer than a cell costs as the band's volume in them (the rock of 1 cm voxels at dx 1.04 m: 12e6
+/// voxels, 10 s).
 std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& grid, double reach,
-                                            const Placement& placement = {}, double band = 0.0);
+                                            const Placement& placement = {}, double band = 0.0, double finestVoxel = 0.0);
 
 /// About how many bytes grid `grid` of a VDB file takes once read, placed at `scale` and its band grown to `band` [m]
 /// on either side (as vdbLevelSet does), known from the grid's metadata without reading its voxels: the memory
 /// OpenVDB and Houdini record with each grid (file_mem_bytes), or else the file's size, grown in proportion to the
-/// band's width over the file's (taken as the usual 3 voxels, the narrowest a level set is written with).
-double vdbFieldBytes(const std::string& path, const std::string& grid, double scale, double band);
+/// band's width over the file's (taken as the usual 3 voxels, the narrowest a level set is written with); for a grid
+/// vdbLevelSet remakes at `finestVoxel`, the file's grid and the remade field's (surfaceFieldBytes, its area from
+/// the file's band).
+double vdbFieldBytes(const std::string& path, const std::string& grid, double scale, double band, double finestVoxel = 0.0);
 
 /// The volume inside a level set's zero crossing [m^3] (OpenVDB's levelSetVolume).
 double insideVolume(const LevelSet& ls);

@@ -177,7 +177,7 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
     } catch (const Interrupted&) {
         throw SetupInterrupted(phase);
     }
-    for (const std::string& w : derived.warnings) events_.warning(w);
+    for (const std::string& w : summarisedWarnings(derived.warnings)) events_.warning(w);
     // From here the scene is the one that runs: every default stated, the pivots the builder derived included.
     scene_.resolvedJson = resolvedWithDerived(scene_, derived);
     long long dueAtStart = 0;  // of the samples held here: those of the sets emitted at frame 0

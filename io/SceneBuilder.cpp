@@ -2,8 +2,10 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <optional>
@@ -42,6 +44,9 @@ double levelSetBand(double dx) { return kInteriorCells * dx; }
 /// The finest voxel the builder picks by itself for a mesh collider [cells]: a mesh with walls thinner than two of
 /// these gets a warning from `mpm validate` instead (the field's memory grows as 1 / voxel^2).
 constexpr double kFinestAutoVoxelCells = 1.0 / 8.0;
+/// A VDB collider's voxel finer than this is remade at it before its band grows (io/LevelSets.h, vdbLevelSet): the
+/// voxel a mesh collider takes at the finest.
+double finestVdbVoxel(double dx) { return kFinestAutoVoxelCells * dx; }
 
 /// Whether a field of this voxel resolves a wall this thick: two voxels across it, to 1% (a faceted round wall
 /// measures thinner at its triangles' centres than at their corners: the example glass's 5 mm wall, 4.997 mm).
@@ -193,8 +198,9 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
 std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v, bool place = true,
                                            bool = false, FieldNotes* notes = nullptr) {
     try {
-        auto ls = vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx),
-                              place ? v.transform : Placement{}, place ? levelSetBand(scene.settings.dx) : 0.0);
+        auto ls =
+            vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx), place ? v.transform : Placement{},
+                        place ? levelSetBand(scene.settings.dx) : 0.0, place ? finestVdbVoxel(scene.settings.dx) : 0.0);
         if (notes) {
             // The middle of what is inside: a file's band may be wider on one side than on the other.
             Vec3d lo, hi;
@@ -227,16 +233,16 @@ std::unique_ptr<Collider> sequenceCollider(const SceneDesc& scene, const std::st
     try {
         const std::vector<int> frames = sequenceFrames(pattern);
         const double reach = colliderReach(scene.settings.dx);
-        const double band = levelSetBand(scene.settings.dx);
-        const auto first =
-            vdbLevelSet(sequenceFile(pattern, frames.front()), v.grid, reach, v.transform, band);  // checked now, not hours later
+        const double band = levelSetBand(scene.settings.dx), finest = finestVdbVoxel(scene.settings.dx);
+        const auto first = vdbLevelSet(sequenceFile(pattern, frames.front()), v.grid, reach, v.transform, band,
+                                       finest);  // checked now, not hours later
         if (!v.velocityGrid.empty() && v.transform.rotate.degrees != 0.0)
             throw LevelSetError(pattern +
                                 ": a rotated sequence cannot turn its velocity grid; leave out \"rotate\" or \"velocity_grid\"");
-        auto load = [pattern, grid = v.grid, vel = v.velocityGrid, reach, placement = v.transform, band](int f) {
+        auto load = [pattern, grid = v.grid, vel = v.velocityGrid, reach, placement = v.transform, band, finest](int f) {
             LevelSetFrame frame;
             const std::string file = sequenceFile(pattern, f);
-            frame.phi = vdbLevelSet(file, grid, reach, placement, band);
+            frame.phi = vdbLevelSet(file, grid, reach, placement, band, finest);
             if (!vel.empty()) frame.velocity = vdbVectorField(file, vel);
             return frame;
         };
@@ -875,6 +881,54 @@ void overlapWarnings(SetCache& cache, const std::vector<std::vector<Vec3d>>& pos
 
 }  // namespace
 
+std::vector<std::string> summarisedWarnings(const std::vector<std::string>& warnings) {
+    // A warning's kind: its text with each run of digits made one '#'.
+    const auto kind = [](const std::string& w) {
+        std::string k;
+        for (std::size_t i = 0; i < w.size(); ++i)
+            if (!std::isdigit(static_cast<unsigned char>(w[i])))
+                k += w[i];
+            else if (k.empty() || k.back() != '#')
+                k += '#';
+        return k;
+    };
+    // "FILE: /json/path: what": the file and the path.
+    const auto part = [](const std::string& w, int which) {
+        const std::size_t a = w.find(": "), b = a == std::string::npos ? a : w.find(": ", a + 2);
+        if (b == std::string::npos) return std::string();
+        return which == 0 ? w.substr(0, a) : w.substr(a + 2, b - a - 2);
+    };
+    std::vector<std::string> shown;
+    std::map<std::string, std::vector<std::size_t>> rest;  // by kind: the warnings past the first kRepeatsShown
+    std::vector<std::string> order;                        // the kinds with a rest, as they first repeat
+    std::map<std::string, std::size_t> seen;
+    for (std::size_t i = 0; i < warnings.size(); ++i) {
+        const std::string k = kind(warnings[i]);
+        if (++seen[k] <= kRepeatsShown) {
+            shown.push_back(warnings[i]);
+            continue;
+        }
+        if (rest[k].empty()) order.push_back(k);
+        rest[k].push_back(i);
+    }
+    constexpr std::size_t kPathsNamed = 8;  // then the last one
+    for (const std::string& k : order) {
+        const std::vector<std::size_t>& r = rest[k];
+        std::string paths;
+        for (std::size_t j = 0; j < r.size(); ++j) {
+            if (j == kPathsNamed && j + 1 < r.size()) {
+                paths += ", ... (" + std::to_string(r.size() - kPathsNamed - 1) + " more), ";
+                j = r.size() - 1;
+            } else if (j > 0) {
+                paths += ", ";
+            }
+            paths += part(warnings[r[j]], 1);
+        }
+        shown.push_back(part(warnings[r.front()], 0) + ": the same as above for " + std::to_string(r.size()) + " more: " + paths);
+    }
+    return shown;
+}
+
 std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::string>* bodies, SetCache* given) {
     std::optional<SetCache> own;
     SetCache& cache = given ? *given : own.emplace(scene);
@@ -1143,7 +1197,7 @@ double colliderFieldBytes(const ColliderEntry& collider) {
                     const bool sequence = shape.file.find("$F") != std::string::npos;
                     const std::string file = sequence ? sequenceFile(path, sequenceFrames(path).front()) : path;
                     return (sequence ? kSequenceFramesHeld : 1.0) *
-                           vdbFieldBytes(file, shape.grid, shape.transform.scale, levelSetBand(dx));
+                           vdbFieldBytes(file, shape.grid, shape.transform.scale, levelSetBand(dx), finestVdbVoxel(dx));
                 } catch (const LevelSetError& e) {
                     throw SceneError(scene.file + ": " + where + "/file: " + e.what());
                 }

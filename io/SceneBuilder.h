@@ -103,6 +103,12 @@ inline constexpr long long kFewParticles = 100;
 std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::string>* bodies = nullptr,
                                        SetCache* cache = nullptr);
 
+/// Warnings as they are printed: where more than kRepeatsShown say the same thing of different parts of the scene
+/// (their texts equal once every number in them is left out: 300 copies of one set give 300 "only 50 particles"), the
+/// first kRepeatsShown in full and then one line naming the rest by their JSON paths, after the others.
+inline constexpr std::size_t kRepeatsShown = 3;
+std::vector<std::string> summarisedWarnings(const std::vector<std::string>& warnings);
+
 /// The values the builder derives for keys a scene leaves to it (Key::derived): each collider's pivot (its
 /// centre) and so its keyframes' positions, a mesh collider's voxel, and each spinning set's pivot (its centroid).
 struct DerivedValues {

@@ -317,7 +317,8 @@ TEST(Cli, AVdbColliderInASceneOfHugeCellsValidatesInSeconds) {
 
 TEST(Cli, OverlappingSetsGetOneLineEachAndManyOfThemAnswerWithinSeconds) {
     // 300 boxes of water in one place and one apart: every set in the pile overlaps the 299 others, and says so in
-    // one line naming three; the one apart says nothing. Tested pair by pair, this took 17 s and printed 14 MB.
+    // one line naming three; the one apart says nothing. Tested pair by pair, this took 17 s and printed 14 MB. The
+    // first kRepeatsShown lines are printed whole, the rest summed up in one naming their paths.
     nlohmann::json scene = {{"simulation", {{"frames", 1}, {"dx", 0.02}}}, {"sets", nlohmann::json::array()}};
     const auto box = [](double x) {
         return nlohmann::json{{"material", "water"},
@@ -337,7 +338,9 @@ TEST(Cli, OverlappingSetsGetOneLineEachAndManyOfThemAnswerWithinSeconds) {
     for (std::size_t at = r.output.find("emitted into the same space"); at != std::string::npos;
          at = r.output.find("emitted into the same space", at + 1))
         ++lines;
-    EXPECT_EQ(lines, std::size_t(kPile));
+    EXPECT_EQ(lines, mpm::kRepeatsShown);
+    EXPECT_NE(r.output.find("pile.json: the same as above for 297 more: /sets/3/shape, /sets/4/shape"), std::string::npos)
+        << r.output.substr(0, 2000);
     EXPECT_NE(
         r.output.find(
             "pile.json: /sets/0/shape: 1000 of 1000 particles lie inside set 1 (\"set1\"); 1000 of 1000 particles lie inside "
@@ -345,8 +348,12 @@ TEST(Cli, OverlappingSetsGetOneLineEachAndManyOfThemAnswerWithinSeconds) {
         std::string::npos)
         << r.output.substr(0, 2000);
     EXPECT_EQ(r.output.find("/sets/300/shape"), std::string::npos);
-    // One line per set of the pile, each about 420 characters (three sets named, the rest counted, what to change).
-    EXPECT_LT(r.output.size(), std::size_t(kPile) * 500);
+    // Three lines of about 420 characters (three sets named, the rest counted, what to change) and the summary.
+    std::size_t warned = 0;
+    std::istringstream text(r.output);
+    for (std::string line; std::getline(text, line);)
+        if (line.rfind("warning: ", 0) == 0) warned += line.size();
+    EXPECT_LT(warned, std::size_t(2000));
     // Two sets: the line names the one.
     scene["sets"] = {box(0.0), box(0.05)};
     const Result two = runMpm("validate " + sceneFile("two.json", scene.dump()));
@@ -472,4 +479,26 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
         runShell("(" + std::string(MPM_BINARY) + " validate --strict --print-scene " + tinySet + " 2>/dev/null)");
     EXPECT_EQ(rejected.code, 2);
     EXPECT_EQ(rejected.output.find("\"simulation\""), std::string::npos) << rejected.output;
+}
+
+TEST(Cli, WarningsThatRepeatAreSummarised) {
+    // Forty copies of one small set: each is small (a warning each) and lies inside the 39 others (a warning each).
+    // Each kind is printed in full three times, then once for the rest, naming them by their paths; --strict still
+    // counts every one.
+    nlohmann::json scene = {{"simulation", {{"frames", 1}, {"dx", 0.05}}}, {"sets", nlohmann::json::array()}};
+    constexpr int kSets = 40;
+    for (int i = 0; i < kSets; ++i)
+        scene["sets"].push_back({{"count", 50}, {"shape", {{"type", "box"}, {"min", {0, 0, 0}}, {"max", {0.1, 0.1, 0.1}}}}});
+    const std::string file = sceneFile("forty_sets.json", scene.dump());
+    const Result r = runMpm("validate " + file);
+    EXPECT_EQ(r.code, 0) << r.output;
+    std::istringstream lines(r.output);
+    int warnings = 0;
+    for (std::string line; std::getline(lines, line);) warnings += line.rfind("warning: ", 0) == 0;
+    EXPECT_EQ(warnings, 2 * int(mpm::kRepeatsShown + 1)) << r.output;
+    EXPECT_NE(r.output.find(": the same as above for 37 more: /sets/3, /sets/4, "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("(28 more), /sets/39"), std::string::npos) << r.output;
+    const Result strict = runMpm("validate --strict " + file);
+    EXPECT_EQ(strict.code, 2);
+    EXPECT_NE(strict.output.find("80 warnings, and --strict makes them errors"), std::string::npos) << strict.output;
 }
