@@ -76,8 +76,15 @@ LevelSet::LevelSet(std::shared_ptr<const Grid> grid, double reach) : grid_(std::
 LevelSet::~LevelSet() = default;
 
 void LevelSet::insideBounds(Vec3d& lo, Vec3d& hi) const {
+    if (insideKept_) {
+        lo = insideLo_, hi = insideHi_;
+        return;
+    }
+    insideBoundsOf(*grid_->grid, lo, hi);
+}
+
+void insideBoundsOf(const openvdb::FloatGrid& g, Vec3d& lo, Vec3d& hi) {
     // The outermost inside voxels border the surface, so they lie in the band: the active values suffice.
-    const openvdb::FloatGrid& g = *grid_->grid;
     openvdb::CoordBBox box;
     for (auto it = g.tree().cbeginValueOn(); it; ++it)
         if (*it <= 0.0f) {

@@ -47,8 +47,11 @@ public:
         hi = hi_;
     }
     /// World box of the voxel centres at or inside the surface (phi <= 0): its middle is the solid's centre,
-    /// whatever band the field has on either side (an empty box, lo > hi, where nothing is inside).
+    /// whatever band the field has on either side (an empty box, lo > hi, where nothing is inside). A field remade
+    /// from another (io/LevelSets.h, vdbLevelSet) answers with the box of the one it was made from, so that a
+    /// collider's centre does not move with the voxel it was remade at.
     void insideBounds(Vec3d& lo, Vec3d& hi) const;
+    void keepInsideBounds(const Vec3d& lo, const Vec3d& hi) { insideLo_ = lo, insideHi_ = hi, insideKept_ = true; }
     const Grid& grid() const { return *grid_; }
 
 private:
@@ -57,6 +60,8 @@ private:
     std::shared_ptr<const Near> near_;
     double voxel_ = 0.0, background_ = 0.0;
     Vec3d lo_ = Vec3d::Zero(), hi_ = Vec3d::Zero();
+    bool insideKept_ = false;
+    Vec3d insideLo_ = Vec3d::Zero(), insideHi_ = Vec3d::Zero();
 };
 
 /// A vector grid (a VDB `vel` grid), sampled trilinearly; zero outside its active voxels.

@@ -10,6 +10,9 @@ struct LevelSet::Grid {
     openvdb::FloatGrid::ConstPtr grid;
 };
 
+/// LevelSet::insideBounds of an OpenVDB level set.
+void insideBoundsOf(const openvdb::FloatGrid& grid, Vec3d& lo, Vec3d& hi);
+
 struct VectorField::Grid {
     openvdb::Vec3SGrid::ConstPtr grid;
 };

@@ -179,6 +179,29 @@ openvdb::GridBase::Ptr readVdbGrid(const std::string& path, const std::string& g
 }
 }  // namespace
 
+namespace {
+/// The fewest voxels a remade field spans an object with along its narrowest side: coarser, a small object (the rock
+/// of 0.35 m under a grid of dx 4 m, whose dx/8 is 0.5 m) would be remade at a voxel that holds none of it.
+constexpr double kRemadeVoxelsAcross = 8.0;
+
+/// The voxel vdbLevelSet remakes a file's field at (0: none, the file's voxel is kept): finestVoxel, or finer where
+/// the object (its box `object` [m]) would span fewer than kRemadeVoxelsAcross of them, and only where that is
+/// coarser than the file's voxel.
+double remadeVoxel(double fileVoxel, const Vec3d& object, double finestVoxel) {
+    const double voxel = std::min(finestVoxel, object.minCoeff() / kRemadeVoxelsAcross);
+    constexpr double kCoarserBy = 1.0 + 1e-6;  // a voxel the same as the file's up to rounding is the file's
+    return voxel > fileVoxel * kCoarserBy ? voxel : 0.0;
+}
+
+/// The band a remade field gets on each side: `band`, but no wider than the object and three voxels (inside, no
+/// point lies deeper; outside, farther is the background's, as where vdbLevelSet grows a band).
+double remadeBand(double band, double voxel, const Vec3d& object) {
+    constexpr double kNarrowestBandVoxels = 3.0;
+    return std::min(band, kNarrowestBandVoxels * voxel + object.norm());
+}
+
+}  // namespace
+
 double vdbFieldBytes(const std::string& path, const std::string& gridName, double scale, double band, double finestVoxel) {
     const openvdb::GridBase::Ptr meta = readVdbGrid(path, gridName, true);
     double bytes = double(std::filesystem::file_size(path));
@@ -193,13 +216,17 @@ double vdbFieldBytes(const std::string& path, const std::string& gridName, doubl
     const auto hi = meta->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MAX);
     if (lo && hi) widest = std::max(1.0, openvdb::Vec3d(hi->value() - lo->value()).length());
     const auto count = meta->getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_VOXEL_COUNT);
-    if (voxel < finestVoxel && band > kNarrowestBandVoxels * voxel && lo && hi && count) {
-        // Remade at finestVoxel from its surface: the file's grid and the new field's, for a surface of the area the
-        // file's band covers at its usual width, in the box the band spans.
-        const double area = double(count->value()) / (2.0 * kNarrowestBandVoxels) * voxel * voxel;
-        const Vec3d size = voxel * Vec3d(double(hi->value()[0] - lo->value()[0]), double(hi->value()[1] - lo->value()[1]),
-                                         double(hi->value()[2] - lo->value()[2]));
-        return bytes + surfaceFieldBytes(area, size, finestVoxel, 2.0 * band);
+    if (band > kNarrowestBandVoxels * voxel && lo && hi && count) {
+        // The object: the band's box less the band (taken at its usual width) on each side.
+        const Vec3d box = voxel * Vec3d(double(hi->value()[0] - lo->value()[0]), double(hi->value()[1] - lo->value()[1]),
+                                        double(hi->value()[2] - lo->value()[2]));
+        const Vec3d object = (box.array() - 2.0 * kNarrowestBandVoxels * voxel).max(voxel);
+        if (const double remade = remadeVoxel(voxel, object, finestVoxel); remade > 0.0) {
+            // Remade from its surface: the file's grid and the new field's, for a surface of the area the file's
+            // band covers at its usual width.
+            const double area = double(count->value()) / (2.0 * kNarrowestBandVoxels) * voxel * voxel;
+            return bytes + surfaceFieldBytes(area, object, remade, 2.0 * remadeBand(band, remade, object));
+        }
     }
     const double grownVoxels = std::min(band / voxel, kNarrowestBandVoxels + widest);
     return bytes * std::max(1.0, grownVoxels / kNarrowestBandVoxels);
@@ -289,10 +316,12 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
     // The background is the band's half width in world units (a level set's convention), stored as a float.
     constexpr double kFloatRounding = 1e-6;
     const bool narrow = double(grid->background()) < band * (1.0 - kFloatRounding);
-    if (narrow && vs[0] < finestVoxel * (1.0 - kFloatRounding)) {
-        // Remade at the coarser voxel from its surface, its band as wide as asked on both sides (deeper inside than
-        // the object is cannot cost more than the object's volume in those voxels).
-        grid = remadeAtVoxel(*grid, finestVoxel, band);
+    Vec3d insideLo, insideHi;
+    insideBoundsOf(*grid, insideLo, insideHi);
+    const Vec3d object = insideLo[0] <= insideHi[0] ? Vec3d(insideHi - insideLo + Vec3d::Constant(vs[0])) : Vec3d::Zero();
+    const double remade = narrow ? remadeVoxel(vs[0], object, finestVoxel) : 0.0;
+    if (remade > 0.0) {
+        grid = remadeAtVoxel(*grid, remade, remadeBand(band, remade, object));
     } else if (narrow) {
         // Extend the band by solving |grad phi| = 1 outward from it (fast sweeping), which keeps the values the file
         // has; a rebuild through a mesh would move them and break the field's symmetries.
@@ -306,7 +335,9 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
     }
     auto holder = std::make_shared<LevelSet::Grid>();
     holder->grid = grid;
-    return std::make_shared<const LevelSet>(holder, reach);
+    auto ls = std::make_shared<LevelSet>(holder, reach);
+    if (remade > 0.0) ls->keepInsideBounds(insideLo, insideHi);
+    return ls;
 }
 }  // namespace
 

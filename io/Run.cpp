@@ -195,8 +195,9 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
                                            " of " + dir_ + ", or else emitting the sets due at the start"
                                      : "emitting the sets due at the start";
     events_.note(starting + " (" + std::to_string(dueAtStart) + " particles" +
-                 (dueAtStart == heldSamples_ ? std::string()
-                                             : "; " + std::to_string(heldSamples_) + " sampled for every set's emissions") +
+                 (dueAtStart == heldSamples_
+                      ? std::string()
+                      : "; " + std::to_string(heldSamples_ - dueAtStart) + " more sampled for the sets due later") +
                  ")");
     guarded(starting, [&] { chooseStart(); });
     onRoot(comm, [&] {

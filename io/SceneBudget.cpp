@@ -199,6 +199,8 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks,
         else
             s.particles = (long long)std::min(expected, 9e18), s.estimated = true;
         s.emissions = d.continuous ? 1 : emissionsWithin(d, scene.frames);  // a stream's volume is its whole flow
+        // A set that starts after the last frame never sets the step (sceneWarnings says it never appears).
+        const bool appears = d.continuous ? d.startFrame < scene.frames : s.emissions > 0;
         double perParticle = 0.0, density = 0.0;
         visitMaterialParams(d.params, [&]<class M>(const typename M::Params& p) {
             // Parameters per particle are one more array; the CFL bound takes the stiffest particle's where the set
@@ -209,7 +211,7 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks,
             M::scaleStiffness(scaled, d.lambdaScale, d.muScale);
             if (fields) scaled = std::get<typename M::Params>(fields->stiffest);
             const float w = restWaveSpeed<M>(scaled);
-            if (!(w <= c)) c = w, stiffest = d.name;  // a NaN wave speed wins, and is reported below
+            if (appears && !(w <= c)) c = w, stiffest = d.name;  // a NaN wave speed wins, and is reported below
             if (const char* why = stiffening<M>(scaled); why && b.stiffening.empty())
                 b.stiffening = "set " + d.name + "'s " + M::kSceneName + " " + why;
         });
@@ -221,7 +223,7 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks,
                 particleMasses(d, float(density), volume, *samples, fields ? fields->densities : std::vector<float>{});
             if (!masses.empty()) s.mass = std::accumulate(masses.begin(), masses.end(), 0.0);
         }
-        vmax = std::max(vmax, d.velocity.norm());
+        if (appears) vmax = std::max(vmax, d.velocity.norm());
         const double total = double(s.particles) * double(s.emissions);
         b.peakParticles += total;
         b.particleSubsteps += double(s.particles) * framesPresent(d, scene.frames);

@@ -758,7 +758,7 @@ void entryWarnings(const SetEntry& set, std::vector<std::string>& out) {
     out.push_back(set.at("start_frame") + ": " + std::to_string(start) + " is after the scene's last frame (simulation.frames " +
                   std::to_string(frames) +
                   "; a set starting at F is in the files from file F on): the set never appears; give a start_frame of at most " +
-                  std::to_string(frames) + " or more frames");
+                  std::to_string(frames) + ", or raise simulation.frames to " + std::to_string(start) + " or more");
 }
 
 /// Set i's word on a viscous liquid that would act as a solid: its relaxation time K / G (at a shear rate of 1/s
@@ -898,22 +898,25 @@ std::vector<std::string> summarisedWarnings(const std::vector<std::string>& warn
         if (b == std::string::npos) return std::string();
         return which == 0 ? w.substr(0, a) : w.substr(a + 2, b - a - 2);
     };
-    std::vector<std::string> shown;
-    std::map<std::string, std::vector<std::size_t>> rest;  // by kind: the warnings past the first kRepeatsShown
-    std::vector<std::string> order;                        // the kinds with a rest, as they first repeat
+    // The warnings of each kind past the first kRepeatsShown, by kind.
+    std::map<std::string, std::vector<std::size_t>> rest;
     std::map<std::string, std::size_t> seen;
     for (std::size_t i = 0; i < warnings.size(); ++i) {
         const std::string k = kind(warnings[i]);
-        if (++seen[k] <= kRepeatsShown) {
-            shown.push_back(warnings[i]);
-            continue;
-        }
-        if (rest[k].empty()) order.push_back(k);
-        rest[k].push_back(i);
+        if (++seen[k] > kRepeatsShown) rest[k].push_back(i);
     }
+    // The first kRepeatsShown of each kind as they come, the last of them followed by the summary of the rest.
     constexpr std::size_t kPathsNamed = 8;  // then the last one
-    for (const std::string& k : order) {
-        const std::vector<std::size_t>& r = rest[k];
+    std::vector<std::string> shown;
+    seen.clear();
+    for (std::size_t i = 0; i < warnings.size(); ++i) {
+        const std::string k = kind(warnings[i]);
+        const std::size_t n = ++seen[k];
+        if (n > kRepeatsShown) continue;
+        shown.push_back(warnings[i]);
+        const auto more = rest.find(k);
+        if (n < kRepeatsShown || more == rest.end()) continue;
+        const std::vector<std::size_t>& r = more->second;
         std::string paths;
         for (std::size_t j = 0; j < r.size(); ++j) {
             if (j == kPathsNamed && j + 1 < r.size()) {

@@ -105,7 +105,7 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
 
 /// Warnings as they are printed: where more than kRepeatsShown say the same thing of different parts of the scene
 /// (their texts equal once every number in them is left out: 300 copies of one set give 300 "only 50 particles"), the
-/// first kRepeatsShown in full and then one line naming the rest by their JSON paths, after the others.
+/// first kRepeatsShown in full, the last of them followed by one line naming the rest by their JSON paths.
 inline constexpr std::size_t kRepeatsShown = 3;
 std::vector<std::string> summarisedWarnings(const std::vector<std::string>& warnings);
 

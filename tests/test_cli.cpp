@@ -425,17 +425,27 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     EXPECT_NE(runMpm("validate --threads 4096 " + scene).output.find("warning: --threads 4096 is more than the "),
               std::string::npos);
     // The particles the start emits are those the first frame has; a set that comes later is counted apart.
-    const Result late = runMpm("run " + sceneFile("late_set.json", R"({"simulation": {"frames": 1, "dx": 0.05},
+    // And validate's step leaves out a set that never appears (thrown at 50 m/s, it would set the step).
+    const std::string lateScene = sceneFile("late_set.json", R"({"simulation": {"frames": 1, "dx": 0.05},
         "output": {"surface": false}, "sets": [{"shape": {"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}},
-        {"start_frame": 5, "shape": {"type": "box", "min": [0, 0.2, 0], "max": [0.2, 0.3, 0.1]}}]})") +
-                               " -o " + scene + "_late");
+        {"start_frame": 5, "velocity": [50, 0, 0], "shape": {"type": "box", "min": [0, 0.2, 0], "max": [0.2, 0.3, 0.1]}}]})");
+    const std::string aloneScene = sceneFile("alone_set.json", R"({"simulation": {"frames": 1, "dx": 0.05},
+        "output": {"surface": false}, "sets": [{"shape": {"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}}]})");
+    const auto stepLine = [](const std::string& out) {
+        const std::size_t at = out.find("substeps per frame:");
+        return at == std::string::npos ? std::string() : out.substr(at, out.find('\n', at) - at);
+    };
+    const std::string lateStep = stepLine(runMpm("validate " + lateScene).output);
+    EXPECT_FALSE(lateStep.empty());
+    EXPECT_EQ(lateStep, stepLine(runMpm("validate " + aloneScene).output));
+    const Result late = runMpm("run " + lateScene + " -o " + scene + "_late");
     const auto numberAfter = [&](const std::string& key) {
         const std::size_t at = late.output.find(key);
         return at == std::string::npos ? -1L : std::atol(late.output.c_str() + at + key.size());
     };
     EXPECT_GT(numberAfter("due at the start ("), 0) << late.output;
     EXPECT_EQ(numberAfter("due at the start ("), numberAfter(" particles ")) << late.output;
-    EXPECT_NE(late.output.find("sampled for every set's emissions"), std::string::npos) << late.output;
+    EXPECT_NE(late.output.find(" more sampled for the sets due later)"), std::string::npos) << late.output;
     const Result frames = runMpm("run " + scene + " --frames x");
     EXPECT_EQ(frames.code, 2);
     EXPECT_NE(frames.output.find("(for example 1:48)"), std::string::npos) << frames.output;
