@@ -352,6 +352,9 @@ int cli(int argc, char** argv) {
                      "the threads the run will take, for its time estimate (default: the scene's, else all cores)")
         ->check(threadCount);
 
+    // Command-line errors as the program's own: "error: " first, as a scene's are.
+    app.failure_message(
+        [](const CLI::App* failed, const CLI::Error& e) { return "error: " + CLI::FailureMessage::simple(failed, e); });
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -751,6 +751,14 @@ constexpr double kMostlyInside = 0.5;
     throw SceneError(what.str());
 }
 
+/// The scene's word when no set enters before its last frame: every frame it writes is empty.
+void emptySceneWarning(const SceneDesc& scene, std::vector<std::string>& out) {
+    const auto late = [&](const ParticleSetDesc& d) { return d.startFrame > scene.frames; };
+    if (scene.sets.empty() || !std::all_of(scene.sets.begin(), scene.sets.end(), late)) return;
+    out.push_back(scene.file + ": /sets: no set appears within the scene's " + std::to_string(scene.frames) +
+                  " frames (simulation.frames): every frame written is empty; start a set earlier or raise simulation.frames");
+}
+
 /// Set i's word on when it enters: starting after the scene's last frame, it never appears.
 void entryWarnings(const SetEntry& set, std::vector<std::string>& out) {
     const int start = set.desc().startFrame, frames = set.scene.frames;
@@ -964,6 +972,7 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
             bodies->push_back(s.str());
         }
     }
+    emptySceneWarning(scene, out);
     std::vector<std::vector<Vec3d>> positions(scene.sets.size());
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const SetEntry set(scene, i);
@@ -1069,6 +1078,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
         bodyOf.push_back(int(at - bodies.begin()));
         if (at == bodies.end()) bodies.push_back(name);
     }
+    emptySceneWarning(scene, found.warnings);
     for (std::size_t i = 0; i < scene.sets.size(); ++i) {
         const SetEntry set(scene, i);
         const ParticleSetDesc& d = set.desc();

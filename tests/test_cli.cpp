@@ -416,6 +416,7 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     EXPECT_EQ(threads.code, 2);
     EXPECT_LT(threads.output.size(), 200u) << threads.output;  // no 300-digit range
     EXPECT_NE(threads.output.find("'abc' is not a thread count"), std::string::npos) << threads.output;
+    EXPECT_EQ(threads.output.rfind("error: ", 0), 0u) << threads.output;  // as a scene's errors are
     // More threads than this process can run at once: said, and the run reports the ones it takes (no machine
     // running this has 4096 cores).
     const Result many = runMpm("run " + scene + " --threads 4096 -o " + scene + "_many");
@@ -438,6 +439,11 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     const std::string lateStep = stepLine(runMpm("validate " + lateScene).output);
     EXPECT_FALSE(lateStep.empty());
     EXPECT_EQ(lateStep, stepLine(runMpm("validate " + aloneScene).output));
+    // A scene whose every set comes after its last frame says so as a whole, validated and run.
+    const std::string onlyLate = sceneFile("only_late.json", R"({"simulation": {"frames": 2, "dx": 0.05},
+        "output": {"surface": false}, "sets": [{"start_frame": 5, "shape": {"type": "box", "min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}}]})");
+    for (const std::string& command : {"validate " + onlyLate, "run " + onlyLate + " -o " + scene + "_only_late"})
+        EXPECT_NE(runMpm(command).output.find("/sets: no set appears within the scene's 2 frames"), std::string::npos) << command;
     const Result late = runMpm("run " + lateScene + " -o " + scene + "_late");
     const auto numberAfter = [&](const std::string& key) {
         const std::size_t at = late.output.find(key);
