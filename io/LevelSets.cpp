@@ -283,7 +283,8 @@ openvdb::FloatGrid::Ptr remadeAtVoxel(const openvdb::FloatGrid& in, double voxel
 }
 
 std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const std::string& gridName, double reach,
-                                                  const Placement& placement, double band, double finestVoxel) {
+                                                  const Placement& placement, double band, double finestVoxel,
+                                                  double* fileVoxel) {
     const openvdb::GridBase::Ptr base = readVdbGrid(path, gridName);
     auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
     if (!grid)
@@ -307,6 +308,7 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
     }
     const openvdb::math::Transform& t = grid->transform();
     const openvdb::Vec3d vs = grid->voxelSize();
+    if (fileVoxel) *fileVoxel = vs[0];
     const bool aligned = t.isLinear() && t.hasUniformScale() &&
                          t.baseMap()->getAffineMap()->getMat4().getMat3().eq(openvdb::math::Mat3d::identity() * vs[0], 1e-9);
     if (!aligned) {
@@ -342,9 +344,9 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
 }  // namespace
 
 std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName, double reach,
-                                            const Placement& placement, double band, double finestVoxel) {
+                                            const Placement& placement, double band, double finestVoxel, double* fileVoxel) {
     try {
-        return placedVdbLevelSet(path, gridName, reach, placement, band, finestVoxel);
+        return placedVdbLevelSet(path, gridName, reach, placement, band, finestVoxel, fileVoxel);
     } catch (const openvdb::Exception& e) {
         // A placement OpenVDB cannot represent: a scale that makes the voxel too small for its maps, for one.
         std::ostringstream what;

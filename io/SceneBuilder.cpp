@@ -104,6 +104,23 @@ std::string thinWallWarning(const SceneDesc& scene, const std::string& where, co
     return w.str();
 }
 
+/// A field whose voxel is coarser than its file's by more than rounding was remade (io/LevelSets.h, vdbLevelSet).
+constexpr double kRemadeAboveFileVoxel = 1.0 + 1e-6;
+
+/// "FILE: /colliders/i/file: ... remade ...": a VDB collider far finer than the grid, remade from its surface at a
+/// coarser voxel, so that a user sees the field that acts is not the file's.
+std::string remadeVdbWarning(const SceneDesc& scene, const std::string& where, const VdbShape& v, double fileVoxel,
+                             double voxel) {
+    std::ostringstream w;
+    w.precision(3);
+    w << scene.file << ": " << where << "/file: " << v.file << "'s voxel of " << fileVoxel << " m is finer than a grid of dx "
+      << scene.settings.dx << " m resolves (dx/8); its distance field is remade from "
+      << "its surface at a voxel of " << voxel
+      << " m (dx/8, or an eighth of the object's narrowest side where that is finer), which rounds edges and details "
+         "smaller than that voxel; a smaller dx keeps more of them";
+    return w.str();
+}
+
 /// What building a collider's field found: the centre its motion turns about unless the scene names a pivot, the
 /// voxel it chose, and a warning about walls thinner than that voxel resolves (empty: none).
 struct FieldNotes {
@@ -198,9 +215,12 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
 std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v, bool place = true,
                                            bool = false, FieldNotes* notes = nullptr) {
     try {
-        auto ls =
-            vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx), place ? v.transform : Placement{},
-                        place ? levelSetBand(scene.settings.dx) : 0.0, place ? finestVdbVoxel(scene.settings.dx) : 0.0);
+        double fileVoxel = 0.0;
+        auto ls = vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx),
+                              place ? v.transform : Placement{}, place ? levelSetBand(scene.settings.dx) : 0.0,
+                              place ? finestVdbVoxel(scene.settings.dx) : 0.0, &fileVoxel);
+        if (notes && ls->voxelSize() > fileVoxel * kRemadeAboveFileVoxel)
+            notes->warning = remadeVdbWarning(scene, where, v, fileVoxel, ls->voxelSize());
         if (notes) {
             // The middle of what is inside: a file's band may be wider on one side than on the other.
             Vec3d lo, hi;
