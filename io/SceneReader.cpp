@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -23,6 +24,20 @@ namespace mpm {
 using json = nlohmann::ordered_json;
 
 namespace {
+
+/// A default as the resolved scene writes it: a float's shortest decimal that reads back to the same float (0.15,
+/// not the 0.15000000596046448 its double holds), so that scene.json shows the values a user would write.
+template <class T>
+double asWritten(T value) {
+    if constexpr (std::is_same_v<T, float>) {
+        char text[32];
+        const auto end = std::to_chars(text, text + sizeof(text), value).ptr;
+        *end = '\0';
+        return std::strtod(text, nullptr);
+    } else {
+        return double(value);
+    }
+}
 
 std::string formatNumber(double v) {
     std::ostringstream s;
@@ -71,7 +86,7 @@ public:
     // The key visitor (base/Parameters.h).
     template <class T>
     void number(const Key& k, T& value) {
-        double v = double(value);
+        double v = asWritten(value);
         if (const json* j = take(k)) {
             if (!j->is_number()) fail(k.name, "expected a number, got " + quoted(*j));
             v = j->get<double>();
@@ -110,7 +125,7 @@ public:
     }
     template <class T>
     void vec3(const Key& k, Eigen::Matrix<T, 3, 1>& value) {
-        Vec3d v = value.template cast<double>();
+        Vec3d v(asWritten(value[0]), asWritten(value[1]), asWritten(value[2]));
         if (k.derived && !given(k.name)) {
             take(k);
             return;
