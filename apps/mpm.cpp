@@ -150,7 +150,11 @@ int run(const std::string& scenePath, const RunOptions& options, int threads, bo
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nThreads));
     installStopHandlers();
     events.stop = &gStopSignal;
-    // Set-up (sampling millions of particles can take a while) says what it does and heeds Ctrl-C at once.
+    // Set-up (sampling millions of particles can take a while) says what it does and heeds Ctrl-C at once, after a
+    // line saying what it runs on, so that a wrong thread count shows before the wait.
+    if (!quiet)
+        std::fprintf(stderr, "mpm: setting up %s on %d rank%s x %d thread%s\n", scenePath.c_str(), comm.size(),
+                     comm.size() == 1 ? "" : "s", nThreads, nThreads == 1 ? "" : "s");
     const auto setupStart = std::chrono::steady_clock::now();
     std::unique_ptr<SceneRun> made;
     try {

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +15,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "base/Text.h"
 #include "io/AtomicFile.h"
 
 namespace fs = std::filesystem;
@@ -496,8 +498,23 @@ void appendSpecies(SimState& a, SimState&& b) {
     }
 }
 
+namespace {
+/// A number that is a float exactly is written as the float's shortest decimal: resolved scenes of earlier versions
+/// wrote a float default as its double (0.15000000596046448), today's as 0.15; both are the same scene.
+void floatsAsWritten(json& j) {
+    if (j.is_structured()) {
+        for (json& e : j) floatsAsWritten(e);
+    } else if (j.is_number_float()) {
+        const double v = j.get<double>();
+        const float f = float(v);
+        if (std::isfinite(f) && double(f) == v) j = shortestDecimal(f);
+    }
+}
+}  // namespace
+
 std::string sceneIdentity(const std::string& resolvedJson) {
     json j = json::parse(resolvedJson);
+    floatsAsWritten(j);
     j.erase("output");
     // Neither changes a result: how many threads, and when ranks re-cut their leaves.
     if (j.contains("simulation") && j["simulation"].is_object())

@@ -334,7 +334,7 @@ std::string describeBudget(const SceneBudget& b) {
       << ")\n";
     // Measured: a snowball thrown at a wall (scenes/snowball_wall.json) ran 31,171 substeps where 4,250 were estimated.
     if (!b.stiffening.empty())
-        s << "  and fewer later: " << b.stiffening
+        s << "  and more later: " << b.stiffening
           << ", which shortens the step; a snowball thrown at a wall ran 7.3 times the substeps estimated here\n";
     if (b.runSeconds > 0.0) {
         const std::string d = duration(b.runSeconds);

@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -25,18 +24,14 @@ using json = nlohmann::ordered_json;
 
 namespace {
 
-/// A default as the resolved scene writes it: a float's shortest decimal that reads back to the same float (0.15,
-/// not the 0.15000000596046448 its double holds), so that scene.json shows the values a user would write.
+/// A default as the resolved scene writes it: a float's shortest decimal (0.15, not the 0.15000000596046448 its
+/// double holds), so that scene.json shows the values a user would write.
 template <class T>
 double asWritten(T value) {
-    if constexpr (std::is_same_v<T, float>) {
-        char text[32];
-        const auto end = std::to_chars(text, text + sizeof(text), value).ptr;
-        *end = '\0';
-        return std::strtod(text, nullptr);
-    } else {
+    if constexpr (std::is_same_v<T, float>)
+        return shortestDecimal(value);
+    else
         return double(value);
-    }
 }
 
 std::string formatNumber(double v) {
