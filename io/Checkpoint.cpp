@@ -516,9 +516,10 @@ std::string sceneIdentity(const std::string& resolvedJson) {
     json j = json::parse(resolvedJson);
     floatsAsWritten(j);
     j.erase("output");
-    // Neither changes a result: how many threads, and when ranks re-cut their leaves.
+    // None changes a frame already simulated: how many threads, when ranks re-cut their leaves, and how many frames
+    // follow (a run extended by raising `frames` resumes from its last checkpoint).
     if (j.contains("simulation") && j["simulation"].is_object())
-        j["simulation"].erase("threads"), j["simulation"].erase("rebalance_imbalance");
+        j["simulation"].erase("threads"), j["simulation"].erase("rebalance_imbalance"), j["simulation"].erase("frames");
     return j.dump();
 }
 

@@ -95,6 +95,25 @@ TEST(Safety, KilledRunsResumeWithTheBitsOfAnUninterruptedRun) {
     expectSameOutput(dir + "/ref", early, "flow");
 }
 
+TEST(Safety, ARunExtendedByRaisingItsFramesResumesFromItsLastCheckpoint) {
+    // The commonest reason to resume: a run looked right, so the user raises `frames` and asks for more. The frame count
+    // changes no frame already simulated, so the run resumes (a new user's trial was refused: "the scene changed");
+    // the frames it adds are an uninterrupted run's bits, and the emitter's repeats continue as scheduled.
+    const std::string dir = tempDir("extend");
+    const std::string scene = writeFile(dir + "/flow.json", kScene);
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/ref", "--quiet"}, dir).code, 0);
+    std::string shorter = kScene;
+    const std::string full = "\"frames\": 14";
+    shorter.replace(shorter.find(full), full.size(), "\"frames\": 6");
+    writeFile(dir + "/flow.json", shorter);
+    ASSERT_EQ(runMpm({"run", scene, "-o", dir + "/out", "--quiet"}, dir).code, 0);
+    writeFile(dir + "/flow.json", kScene);
+    const Result r = runMpm({"run", scene, "-o", dir + "/out", "--resume"}, dir);
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("frames 7 to 14"), std::string::npos) << r.output;
+    expectSameOutput(dir + "/ref", dir + "/out", "flow");
+}
+
 TEST(Safety, SignalsStopAtASubstepWithACheckpointAndTheRunResumes) {
     const std::string dir = tempDir("signal");
     const std::string scene = writeFile(dir + "/flow.json", kScene);
