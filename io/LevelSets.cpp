@@ -185,12 +185,14 @@ namespace {
 constexpr double kRemadeVoxelsAcross = 8.0;
 
 /// The voxel vdbLevelSet remakes a file's field at (0: none, the file's voxel is kept): finestVoxel, or finer where
-/// the object (its box `object` [m]) would span fewer than kRemadeVoxelsAcross of them, and only where that is
-/// coarser than the file's voxel.
+/// the object (its box `object` [m], in the file's axes) would span fewer than kRemadeVoxelsAcross of them, and only
+/// where that is at least twice the file's voxel.
 double remadeVoxel(double fileVoxel, const Vec3d& object, double finestVoxel) {
     const double voxel = std::min(finestVoxel, object.minCoeff() / kRemadeVoxelsAcross);
-    constexpr double kCoarserBy = 1.0 + 1e-6;  // a voxel the same as the file's up to rounding is the file's
-    return voxel > fileVoxel * kCoarserBy ? voxel : 0.0;
+    // A remake pays where it at least doubles the voxel (an eighth of the voxels to grow the band in); nearer the
+    // file's voxel it would round the surface for little gain (at dx/8 = 1.001 file voxels, nothing but rounding).
+    constexpr double kCoarserBy = 2.0, kRounding = 1e-6;
+    return voxel >= fileVoxel * kCoarserBy * (1.0 - kRounding) ? voxel : 0.0;
 }
 
 /// The band a remade field gets on each side: `band`, but no wider than the object and three voxels (inside, no
@@ -293,6 +295,13 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
     if (grid->getGridClass() != openvdb::GRID_LEVEL_SET)
         throw LevelSetError(path + ": grid \"" + gridName + "\" is a " + gridClassName(grid->getGridClass()) +
                             ", not a level set; a collider needs a signed distance field (Houdini: VDB from Polygons, distance)");
+    // The object's box in the file's own axes, at the placement's scale: the size a remade voxel is chosen by, the
+    // same however the object is turned (and as vdbFieldBytes reads it from the file's metadata).
+    Vec3d fileLo, fileHi;
+    insideBoundsOf(*grid, fileLo, fileHi);
+    const double fileVoxelPlaced = grid->voxelSize()[0] * placement.scale;
+    const Vec3d object =
+        fileLo[0] <= fileHi[0] ? Vec3d(placement.scale * (fileHi - fileLo) + Vec3d::Constant(fileVoxelPlaced)) : Vec3d::Zero();
     if (!placement.identity()) {
         // Distances scale with the grid; the index-to-world map gains the placement (OpenVDB's maps act on row
         // vectors, so the rotation enters transposed).
@@ -320,7 +329,6 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
     const bool narrow = double(grid->background()) < band * (1.0 - kFloatRounding);
     Vec3d insideLo, insideHi;
     insideBoundsOf(*grid, insideLo, insideHi);
-    const Vec3d object = insideLo[0] <= insideHi[0] ? Vec3d(insideHi - insideLo + Vec3d::Constant(vs[0])) : Vec3d::Zero();
     const double remade = narrow ? remadeVoxel(vs[0], object, finestVoxel) : 0.0;
     if (remade > 0.0) {
         grid = remadeAtVoxel(*grid, remade, remadeBand(band, remade, object));

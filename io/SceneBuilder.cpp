@@ -107,17 +107,21 @@ std::string thinWallWarning(const SceneDesc& scene, const std::string& where, co
 /// A field whose voxel is coarser than its file's by more than rounding was remade (io/LevelSets.h, vdbLevelSet).
 constexpr double kRemadeAboveFileVoxel = 1.0 + 1e-6;
 
-/// "FILE: /colliders/i/file: ... remade ...": a VDB collider far finer than the grid, remade from its surface at a
-/// coarser voxel, so that a user sees the field that acts is not the file's.
-std::string remadeVdbWarning(const SceneDesc& scene, const std::string& where, const VdbShape& v, double fileVoxel,
-                             double voxel) {
+/// "collider i (name): the distance field of FILE ... is remade ...": a VDB collider far finer than the grid, remade from
+/// its surface at a coarser voxel, so that a user sees the field that acts is not the file's, and by which rule.
+std::string remadeVdbNote(const ColliderEntry& collider, const VdbShape& v, double fileVoxel, double voxel) {
+    const double dx = collider.scene.settings.dx, eighth = finestVdbVoxel(dx);
+    constexpr double kSameVoxel = 1e-9;  // relative: the voxel is dx/8 up to rounding
     std::ostringstream w;
     w.precision(3);
-    w << scene.file << ": " << where << "/file: " << v.file << "'s voxel of " << fileVoxel << " m is finer than a grid of dx "
-      << scene.settings.dx << " m resolves (dx/8); its distance field is remade from "
-      << "its surface at a voxel of " << voxel
-      << " m (dx/8, or an eighth of the object's narrowest side where that is finer), which rounds edges and details "
-         "smaller than that voxel; a smaller dx keeps more of them";
+    w << "collider " << collider.index << " (" << collider.desc().name << "): the distance field of " << v.file << " (voxels of "
+      << fileVoxel << " m) is remade from its surface at a voxel of " << voxel << " m, ";
+    if (std::abs(voxel - eighth) <= kSameVoxel * eighth)
+        w << "dx/8; details smaller than that are rounded (a smaller dx keeps more of them)";
+    else
+        w << "an eighth of the narrowest side of its box (" << 8.0 * voxel << " m), which dx/8 (" << eighth
+          << " m) would not resolve; details smaller than that are rounded (a dx under " << 8.0 * voxel
+          << " m keeps more of them)";
     return w.str();
 }
 
@@ -127,7 +131,8 @@ struct FieldNotes {
     Vec3d centre = Vec3d::Zero();
     double voxel = 0.0;
     std::string warning;
-    bool keepMesh = false;  ///< asked for a body: the mesh as placed, which must be closed, for its mass properties
+    double fileVoxel = 0.0;  ///< a VDB's voxel where its field was remade at `voxel` (0: not remade)
+    bool keepMesh = false;   ///< asked for a body: the mesh as placed, which must be closed, for its mass properties
     TriangleMesh mesh;
 };
 
@@ -219,9 +224,8 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
         auto ls = vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx),
                               place ? v.transform : Placement{}, place ? levelSetBand(scene.settings.dx) : 0.0,
                               place ? finestVdbVoxel(scene.settings.dx) : 0.0, &fileVoxel);
-        if (notes && ls->voxelSize() > fileVoxel * kRemadeAboveFileVoxel)
-            notes->warning = remadeVdbWarning(scene, where, v, fileVoxel, ls->voxelSize());
         if (notes) {
+            if (ls->voxelSize() > fileVoxel * kRemadeAboveFileVoxel) notes->fileVoxel = fileVoxel;
             // The middle of what is inside: a file's band may be wider on one side than on the other.
             Vec3d lo, hi;
             ls->insideBounds(lo, hi);
@@ -342,7 +346,7 @@ void lockWarnings(const SceneDesc& scene, const std::string& where, const Dynami
 /// `warnings` what is worth a word about its field; `body`, what a dynamic collider is as a rigid body.
 std::unique_ptr<Collider> colliderOf(const ColliderEntry& collider, Vec3d* pivot = nullptr,
                                      std::vector<std::string>* warnings = nullptr, double* voxel = nullptr,
-                                     std::optional<BodySpec>* body = nullptr) {
+                                     std::optional<BodySpec>* body = nullptr, std::vector<std::string>* report = nullptr) {
     const SceneDesc& scene = collider.scene;
     const ColliderDesc& c = collider.desc();
     const auto motion = [&](const Vec3d& centre) {
@@ -350,6 +354,13 @@ std::unique_ptr<Collider> colliderOf(const ColliderEntry& collider, Vec3d* pivot
         return motionOf(c.motion, centre, scene.settings.fps);
     };
     const std::string where = collider.path();
+    // What building its field found: warnings, the voxel chosen, and the line saying a VDB's field was remade.
+    const auto keep = [&](const FieldNotes& notes) {
+        if (warnings && !notes.warning.empty()) warnings->push_back(notes.warning);
+        if (voxel) *voxel = notes.voxel;
+        if (const auto* v = std::get_if<VdbShape>(&c.shape); report && v && notes.fileVoxel > 0.0)
+            report->push_back(remadeVdbNote(collider, *v, notes.fileVoxel, notes.voxel));
+    };
     if (const auto* v = std::get_if<VdbShape>(&c.shape); v && v->file.find("$F") != std::string::npos && !c.dynamic.enabled)
         return motion(Vec3d::Zero()), sequenceCollider(scene, where, c, *v);
     return std::visit(
@@ -400,8 +411,7 @@ std::unique_ptr<Collider> colliderOf(const ColliderEntry& collider, Vec3d* pivot
                                              " edges of its zero crossing border one triangle only: the surface runs into the "
                                              "edge of the grid's band or active voxels)");
                     }
-                    if (warnings && !notes.warning.empty()) warnings->push_back(notes.warning);
-                    if (voxel) *voxel = notes.voxel;
+                    keep(notes);
                     const MassProperties props =
                         polyhedronMassProperties(notes.mesh.points, notes.mesh.triangles,
                                                  notes.mesh.bounds().sizes().maxCoeff() / kMeshContactSamplesPerSide);
@@ -420,8 +430,7 @@ std::unique_ptr<Collider> colliderOf(const ColliderEntry& collider, Vec3d* pivot
             if constexpr (kFromFile<S>) {
                 FieldNotes notes;
                 const auto ls = levelSetOf(scene, where, shape, true, c.inside, &notes);
-                if (warnings && !notes.warning.empty()) warnings->push_back(notes.warning);
-                if (voxel) *voxel = notes.voxel;
+                keep(notes);
                 return std::make_unique<RigidCollider<LevelSetGeometry>>(LevelSetGeometry{ls}, c.boundary, c.friction,
                                                                          motion(notes.centre), c.inside);
             } else {
@@ -976,7 +985,7 @@ std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::
     std::vector<std::unique_ptr<Collider>> colliders;
     for (std::size_t c = 0; c < scene.colliders.size(); ++c) {
         std::optional<BodySpec> body;
-        colliders.push_back(colliderOf(ColliderEntry(scene, c), nullptr, &out, nullptr, &body));
+        colliders.push_back(colliderOf(ColliderEntry(scene, c), nullptr, &out, nullptr, &body, bodies));
         if (!body) continue;
         const RigidBodyModel& m = body->model;
         if (bodies) {
@@ -1086,7 +1095,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
             },
             scene.colliders[i].shape);
         colliders.push_back(colliderOf(ColliderEntry(scene, i), &found.colliderPivot[i], &found.warnings, &found.colliderVoxel[i],
-                                       &bodySpecs[i]));
+                                       &bodySpecs[i], &found.notes));
     }
     const SpeciesLayout layout = speciesLayout(scene);
     // Bodies, numbered in order of first appearance: a set's `body` name, or else its own name.

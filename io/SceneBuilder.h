@@ -98,7 +98,8 @@ inline constexpr double kSampleUpTo = 2e6;
 /// than kFewParticles particles, a set starting partly inside a collider, two sets that overlap. Samples the
 /// sets (up to kSampleUpTo particles) and builds the colliders (mpm validate prints these; with --strict they fail it).
 inline constexpr long long kFewParticles = 100;
-/// `bodies`, if given, receives a line per rigid body: its mass, centre of mass and principal moments of inertia.
+/// `bodies`, if given, receives a line per rigid body (its mass, centre of mass and principal moments of inertia) and
+/// per VDB collider whose field was remade at a coarser voxel (which voxel, and why).
 /// `cache`, if given, is the scene's (its samples and fields are shared with estimateBudget's).
 std::vector<std::string> sceneWarnings(const SceneDesc& scene, std::vector<std::string>* bodies = nullptr,
                                        SetCache* cache = nullptr);
@@ -118,6 +119,8 @@ struct DerivedValues {
     /// What sceneWarnings would say of a set's start and a mesh collider's walls, found on the way (not the pairwise
     /// overlap of sets): a run prints them.
     std::vector<std::string> warnings;
+    /// What is worth a line but is no warning: a VDB collider's field remade at a coarser voxel.
+    std::vector<std::string> notes;
 };
 
 /// Builds the simulation the scene describes. Throws SceneError when a set's shape holds no particle. On
