@@ -343,7 +343,8 @@ void lockWarnings(const SceneDesc& scene, const std::string& where, const Dynami
 }
 
 /// The collider; `pivot`, if given, receives the pivot its motion turns about (the scene's, or its centre), and
-/// `warnings` what is worth a word about its field; `body`, what a dynamic collider is as a rigid body.
+/// `warnings` what is worth a word about its field; `body`, what a dynamic collider is as a rigid body; `report`, a line
+/// saying that a VDB's field was remade at a coarser voxel.
 std::unique_ptr<Collider> colliderOf(const ColliderEntry& collider, Vec3d* pivot = nullptr,
                                      std::vector<std::string>* warnings = nullptr, double* voxel = nullptr,
                                      std::optional<BodySpec>* body = nullptr, std::vector<std::string>* report = nullptr) {
