@@ -170,6 +170,7 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
         phase = what;
         events_.note(what);
     };
+    watch.report = [&](const std::string& what) { events_.note(what); };
     if (!comm.distributed()) watch.stop = events_.stop;
     try {
         guarded("sampling the particle sets", [&] { sim_ = buildSimulation(scene_, Comm::world(), &derived, watch); });
@@ -178,7 +179,6 @@ SceneRun::SceneRun(const std::string& scenePath, RunOptions options, RunEvents e
         throw SetupInterrupted(phase);
     }
     for (const std::string& w : summarisedWarnings(derived.warnings)) events_.warning(w);
-    for (const std::string& n : derived.notes) events_.note(n);
     // From here the scene is the one that runs: every default stated, the pivots the builder derived included.
     scene_.resolvedJson = resolvedWithDerived(scene_, derived);
     long long dueAtStart = 0;  // of the samples held here: those of the sets emitted at frame 0

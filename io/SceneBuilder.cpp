@@ -1087,6 +1087,7 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
     std::vector<std::unique_ptr<Collider>> colliders;
     std::vector<std::optional<BodySpec>> bodySpecs(scene.colliders.size());
     found.colliderVoxel.assign(scene.colliders.size(), 0.0);
+    std::size_t saidNotes = 0;
     for (std::size_t i = 0; i < scene.colliders.size(); ++i) {
         asked.checkStop();
         std::visit(
@@ -1097,6 +1098,8 @@ std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& 
             scene.colliders[i].shape);
         colliders.push_back(colliderOf(ColliderEntry(scene, i), &found.colliderPivot[i], &found.warnings, &found.colliderVoxel[i],
                                        &bodySpecs[i], &found.notes));
+        for (std::size_t n = saidNotes; n < found.notes.size(); ++n) watch.report(found.notes[n]);
+        saidNotes = found.notes.size();
     }
     const SpeciesLayout layout = speciesLayout(scene);
     // Bodies, numbered in order of first appearance: a set's `body` name, or else its own name.

@@ -119,7 +119,8 @@ struct DerivedValues {
     /// What sceneWarnings would say of a set's start and a mesh collider's walls, found on the way (not the pairwise
     /// overlap of sets): a run prints them.
     std::vector<std::string> warnings;
-    /// What is worth a line but is no warning: a VDB collider's field remade at a coarser voxel.
+    /// What is worth a line but is no warning: a VDB collider's field remade at a coarser voxel (SetupWatch::report
+    /// says each as it is found).
     std::vector<std::string> notes;
 };
 
@@ -132,6 +133,8 @@ struct DerivedValues {
 /// acts at once, and nothing has been simulated or written yet.
 struct SetupWatch {
     std::function<void(const std::string&)> note = [](const std::string&) {};
+    /// What building found that is worth a line but is not a phase (a VDB collider's field remade), said as it is found.
+    std::function<void(const std::string&)> report = [](const std::string&) {};
     const std::atomic<int>* stop = nullptr;
 };
 std::unique_ptr<Simulation> buildSimulation(const SceneDesc& scene, const Comm& comm = Comm::single(),
