@@ -286,7 +286,7 @@ openvdb::FloatGrid::Ptr remadeAtVoxel(const openvdb::FloatGrid& in, double voxel
 
 std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const std::string& gridName, double reach,
                                                   const Placement& placement, double band, double finestVoxel,
-                                                  double* fileVoxel) {
+                                                  double* remadeFrom) {
     const openvdb::GridBase::Ptr base = readVdbGrid(path, gridName);
     auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
     if (!grid)
@@ -317,7 +317,6 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
     }
     const openvdb::math::Transform& t = grid->transform();
     const openvdb::Vec3d vs = grid->voxelSize();
-    if (fileVoxel) *fileVoxel = vs[0];
     const bool aligned = t.isLinear() && t.hasUniformScale() &&
                          t.baseMap()->getAffineMap()->getMat4().getMat3().eq(openvdb::math::Mat3d::identity() * vs[0], 1e-9);
     if (!aligned) {
@@ -327,10 +326,11 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
     // The background is the band's half width in world units (a level set's convention), stored as a float.
     constexpr double kFloatRounding = 1e-6;
     const bool narrow = double(grid->background()) < band * (1.0 - kFloatRounding);
-    Vec3d insideLo, insideHi;
-    insideBoundsOf(*grid, insideLo, insideHi);
     const double remade = narrow ? remadeVoxel(vs[0], object, finestVoxel) : 0.0;
+    if (remadeFrom) *remadeFrom = remade > 0.0 ? vs[0] : 0.0;
+    Vec3d insideLo, insideHi;  // the placed file's box of inside voxels, kept by a remade field
     if (remade > 0.0) {
+        insideBoundsOf(*grid, insideLo, insideHi);
         grid = remadeAtVoxel(*grid, remade, remadeBand(band, remade, object));
     } else if (narrow) {
         // Extend the band by solving |grad phi| = 1 outward from it (fast sweeping), which keeps the values the file
@@ -352,9 +352,9 @@ std::shared_ptr<const LevelSet> placedVdbLevelSet(const std::string& path, const
 }  // namespace
 
 std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& gridName, double reach,
-                                            const Placement& placement, double band, double finestVoxel, double* fileVoxel) {
+                                            const Placement& placement, double band, double finestVoxel, double* remadeFrom) {
     try {
-        return placedVdbLevelSet(path, gridName, reach, placement, band, finestVoxel, fileVoxel);
+        return placedVdbLevelSet(path, gridName, reach, placement, band, finestVoxel, remadeFrom);
     } catch (const openvdb::Exception& e) {
         // A placement OpenVDB cannot represent: a scale that makes the voxel too small for its maps, for one.
         std::ostringstream what;

@@ -61,10 +61,11 @@ std::shared_ptr<const LevelSet> meshLevelSet(const TriangleMesh& mesh, const std
 /// (volumeToMesh, then meshToSignedDistanceField, as a mesh collider is made): growing a band of a few grid cells
 /// in voxels far finer than a cell costs as the band's volume in them (the rock of 1 cm voxels at dx 1.04 m: 12e6
 /// voxels, 10 s).
-/// `fileVoxel`, when given, receives the file's voxel as placed [m]: a field remade has a coarser one.
+/// `remadeFrom`, when given, receives the file's voxel as placed [m] where the field was remade, and 0 where the
+/// file's own voxels were kept.
 std::shared_ptr<const LevelSet> vdbLevelSet(const std::string& path, const std::string& grid, double reach,
                                             const Placement& placement = {}, double band = 0.0, double finestVoxel = 0.0,
-                                            double* fileVoxel = nullptr);
+                                            double* remadeFrom = nullptr);
 
 /// About how many bytes grid `grid` of a VDB file takes once read, placed at `scale` and its band grown to `band` [m]
 /// on either side (as vdbLevelSet does), known from the grid's metadata without reading its voxels: the memory

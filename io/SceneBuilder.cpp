@@ -104,9 +104,6 @@ std::string thinWallWarning(const SceneDesc& scene, const std::string& where, co
     return w.str();
 }
 
-/// A field whose voxel is coarser than its file's by more than rounding was remade (io/LevelSets.h, vdbLevelSet).
-constexpr double kRemadeAboveFileVoxel = 1.0 + 1e-6;
-
 /// "collider i (name): the distance field of FILE ... is remade ...": a VDB collider far finer than the grid, remade from
 /// its surface at a coarser voxel, so that a user sees the field that acts is not the file's, and by which rule.
 std::string remadeVdbNote(const ColliderEntry& collider, const VdbShape& v, double fileVoxel, double voxel) {
@@ -220,12 +217,12 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
 std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::string& where, const VdbShape& v, bool place = true,
                                            bool = false, FieldNotes* notes = nullptr) {
     try {
-        double fileVoxel = 0.0;
+        double remadeFrom = 0.0;
         auto ls = vdbLevelSet(besideScene(scene, v.file), v.grid, colliderReach(scene.settings.dx),
                               place ? v.transform : Placement{}, place ? levelSetBand(scene.settings.dx) : 0.0,
-                              place ? finestVdbVoxel(scene.settings.dx) : 0.0, &fileVoxel);
+                              place ? finestVdbVoxel(scene.settings.dx) : 0.0, &remadeFrom);
         if (notes) {
-            if (ls->voxelSize() > fileVoxel * kRemadeAboveFileVoxel) notes->fileVoxel = fileVoxel;
+            notes->fileVoxel = remadeFrom;
             // The middle of what is inside: a file's band may be wider on one side than on the other.
             Vec3d lo, hi;
             ls->insideBounds(lo, hi);
