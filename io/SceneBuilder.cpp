@@ -236,6 +236,19 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
     }
 }
 
+/// A pivot the builder derives (a collider's centre, a set's centroid) rounded to whole picometres, so that a resolved
+/// scene writes it in a few digits (0.055, not 0.05499999999999999) and reads it back to the same bits. Past 2^53 pm
+/// (9 km) picometres are not whole in a double, and the pivot stays as it is. A rigid body's pivot is its centre of
+/// mass and stays exact: it keys the body's path.
+Vec3d derivedPivot(const Vec3d& x) {
+    constexpr double kPerMetre = 1e12;
+    constexpr double kWholeBelow = 9007199254740992.0;  // 2^53
+    Vec3d out = x;
+    for (int a = 0; a < 3; ++a)
+        if (const double n = std::round(x[a] * kPerMetre); std::abs(n) < kWholeBelow) out[a] = n / kPerMetre;
+    return out;
+}
+
 Motion motionOf(const MotionDesc& m, const Vec3d& centre, double fps) {
     const Vec3d pivot = m.pivotGiven ? m.pivot : centre;
     if (m.keyframes.empty()) return Motion::constant(m.velocity, m.angularVelocity, pivot);
@@ -348,8 +361,9 @@ std::unique_ptr<Collider> colliderOf(const ColliderEntry& collider, Vec3d* pivot
     const SceneDesc& scene = collider.scene;
     const ColliderDesc& c = collider.desc();
     const auto motion = [&](const Vec3d& centre) {
-        if (pivot) *pivot = c.motion.pivotGiven ? c.motion.pivot : centre;
-        return motionOf(c.motion, centre, scene.settings.fps);
+        const Vec3d turnsAbout = c.dynamic.enabled ? centre : derivedPivot(centre);
+        if (pivot) *pivot = c.motion.pivotGiven ? c.motion.pivot : turnsAbout;
+        return motionOf(c.motion, turnsAbout, scene.settings.fps);
     };
     const std::string where = collider.path();
     // What building its field found: warnings, the voxel chosen, and the line saying a VDB's field was remade.
@@ -586,6 +600,7 @@ static void addInitialVelocities(const SetEntry& set, SetSamples& out, const Com
                 comm.sum(sum[a]);
                 pivot[a] = sum[a].value() / double(std::max(all, 1LL));
             }
+            pivot = derivedPivot(pivot);
         }
         for (std::size_t p = 0; p < n; ++p) out.velocities[p] += d.angularVelocity.cross(out.positions[p] - pivot).cast<float>();
         out.pivot = pivot;
