@@ -236,16 +236,18 @@ std::shared_ptr<const LevelSet> levelSetOf(const SceneDesc& scene, const std::st
     }
 }
 
-/// A pivot the builder derives (a collider's centre, a set's centroid) rounded to whole picometres, so that a resolved
-/// scene writes it in a few digits (0.055, not 0.05499999999999999) and reads it back to the same bits. Past 2^53 pm
-/// (9 km) picometres are not whole in a double, and the pivot stays as it is. A rigid body's pivot is its centre of
-/// mass and stays exact: it keys the body's path.
-Vec3d derivedPivot(const Vec3d& x) {
-    constexpr double kPerMetre = 1e12;
-    constexpr double kWholeBelow = 9007199254740992.0;  // 2^53
+/// A point the builder derives to turn things about (a moving collider's centre, a spinning set's centroid), rounded
+/// to a decimal step of 1e-4 of dx's decade (a micrometre for dx of 0.01-0.099 m), so that a resolved scene writes it
+/// in a few digits (0.055, not 0.05499999999999999 or a mesh's 0.45000001788139343) and reads it back to the same
+/// bits; the point moves by at most half a step, 5e-5 dx. A rigid body's pivot is its centre of mass, kept exact: a
+/// centre of mass half a micrometre off its geometry's spins two spheres that meet head on (RigidBody tests).
+Vec3d derivedPivot(const Vec3d& x, double dx) {
+    constexpr int kDigitsBelowDx = 4;
+    constexpr double kWholeBelow = 9007199254740992.0;  // 2^53: past it, whole steps are not exact in a double
+    const double perMetre = std::pow(10.0, kDigitsBelowDx - std::floor(std::log10(dx)));
     Vec3d out = x;
     for (int a = 0; a < 3; ++a)
-        if (const double n = std::round(x[a] * kPerMetre); std::abs(n) < kWholeBelow) out[a] = n / kPerMetre;
+        if (const double n = std::round(x[a] * perMetre); std::abs(n) < kWholeBelow) out[a] = n / perMetre;
     return out;
 }
 
@@ -361,7 +363,7 @@ std::unique_ptr<Collider> colliderOf(const ColliderEntry& collider, Vec3d* pivot
     const SceneDesc& scene = collider.scene;
     const ColliderDesc& c = collider.desc();
     const auto motion = [&](const Vec3d& centre) {
-        const Vec3d turnsAbout = c.dynamic.enabled ? centre : derivedPivot(centre);
+        const Vec3d turnsAbout = c.dynamic.enabled ? centre : derivedPivot(centre, scene.settings.dx);
         if (pivot) *pivot = c.motion.pivotGiven ? c.motion.pivot : turnsAbout;
         return motionOf(c.motion, turnsAbout, scene.settings.fps);
     };
@@ -600,7 +602,7 @@ static void addInitialVelocities(const SetEntry& set, SetSamples& out, const Com
                 comm.sum(sum[a]);
                 pivot[a] = sum[a].value() / double(std::max(all, 1LL));
             }
-            pivot = derivedPivot(pivot);
+            pivot = derivedPivot(pivot, set.scene.settings.dx);
         }
         for (std::size_t p = 0; p < n; ++p) out.velocities[p] += d.angularVelocity.cross(out.positions[p] - pivot).cast<float>();
         out.pivot = pivot;

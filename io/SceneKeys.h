@@ -318,7 +318,7 @@ void setKeys(V& v, ParticleSetDesc& d) {
     v.vec3(Key{.name = "pivot",
                .help = "centre of the spin; the resolved scene of a spinning set states the centroid it took",
                .unit = "m",
-               .byDefault = "the set's centroid",
+               .byDefault = "the set's centroid (its particles' mean, to 1e-4 of dx's decade)",
                .derived = true},
            d.pivot);
     d.pivotGiven = v.given("pivot");
@@ -392,7 +392,8 @@ void motionKeys(V& v, MotionDesc& m) {
         Key{.name = "pivot",
             .help = "the point it turns about, and whose position keyframes give; the resolved scene states the centre it took",
             .unit = "m",
-            .byDefault = "the collider's centre (a mesh's: its box's; a VDB's: the box of its inside voxels')",
+            .byDefault = "the collider's centre (a mesh's: its box's; a VDB's: the box of its inside voxels'; to 1e-4 of dx's "
+                         "decade), a dynamic body's centre of mass",
             .derived = true},
         m.pivot);
     double previous = -std::numeric_limits<double>::infinity();

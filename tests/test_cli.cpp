@@ -206,16 +206,16 @@ TEST(Cli, TheResolvedSceneOfEveryShippedSceneReadsBackToItself) {
         const std::string again = (out / "scene.json").string();
         std::ofstream(again) << j.dump(2);
         EXPECT_EQ(resolvedOf(again), first) << e.path();
-        // Defaults held as floats are written as a user would write them (0.15, not 0.15000000596046448): every number
-        // in at most 9 significant digits. The pivots the builder derives are whole picometres (0.055, not
-        // 0.05499999999999999; a mesh's centre 0.450000017881, its float vertices' middle): at most 12 digits.
+        // Defaults held as floats are written as a user would write them (0.15, not 0.15000000596046448), and so are the
+        // pivots the builder derives (0.055, not 0.05499999999999999; a mesh's 0.45, not 0.45000001788139343): every
+        // number in at most 9 significant digits.
         const std::function<void(const nlohmann::ordered_json&, const std::string&)> noNoise = [&](const auto& v,
                                                                                                    const std::string& key) {
             if (v.is_structured()) {
                 for (auto it = v.begin(); it != v.end(); ++it) noNoise(*it, v.is_object() ? it.key() : key);
             } else if (v.is_number_float()) {
                 char text[32];
-                std::snprintf(text, sizeof(text), key == "pivot" ? "%.12g" : "%.9g", v.template get<double>());
+                std::snprintf(text, sizeof(text), "%.9g", v.template get<double>());
                 EXPECT_EQ(std::strtod(text, nullptr), v.template get<double>()) << e.path() << ": " << key << " " << v.dump();
             }
         };
@@ -268,7 +268,7 @@ TEST(Cli, ValidateGivesTheRunTimeAndWarnsOfAScaleMistakeWithinSeconds) {
     EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 60.0);
     EXPECT_EQ(r.code, 0) << r.output;
     EXPECT_NE(r.output.find("run time: about "), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("frames written, at costs measured now on water"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("frames written, from costs measured now on a block of water"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("big.json: /sets: the run would take about "), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("(33510321 particles, 59 substeps a frame, 4800 frames)"), std::string::npos) << r.output;
     EXPECT_EQ(runMpm("validate --strict " + big).code, 2);
@@ -496,7 +496,7 @@ TEST(Cli, VersionThreadsFramesAndAnUnwritableOutputAreClear) {
     // JSON that parses. --threads sets the threads the run-time estimate is measured on.
     const Result report = runShell("(" + std::string(MPM_BINARY) + " validate --threads 1 " + scene + " 2>/dev/null)");
     EXPECT_NE(report.output.find(": valid (1 particle set)"), std::string::npos) << report.output;
-    EXPECT_NE(report.output.find("on water on 1 thread:"), std::string::npos) << report.output;
+    EXPECT_NE(report.output.find("on a block of water on 1 thread:"), std::string::npos) << report.output;
     const Result json = runShell("(" + std::string(MPM_BINARY) + " validate --print-scene " + scene + " 2>/dev/null)");
     EXPECT_EQ(json.code, 0);
     ASSERT_TRUE(nlohmann::json::accept(json.output)) << json.output;
