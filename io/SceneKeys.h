@@ -305,7 +305,7 @@ void setKeys(V& v, ParticleSetDesc& d) {
     v.choice(Key{.name = "material", .help = "material preset", .noun = "material"}, d.material, materialSceneNames());
     v.text(Key{.name = "body",
                .help = "multi_field contact: sets with one body name share a velocity field",
-               .byDefault = "the set's own"},
+               .byDefault = "\"\": a body of its own"},
            d.body);
     v.vec3(Key{.name = "velocity", .help = "initial velocity", .unit = "m/s"}, d.velocity);
     if (!v.given("color")) d.colour = defaultColour(d.material);
