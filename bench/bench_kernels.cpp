@@ -193,7 +193,7 @@ void BM_Material(benchmark::State& st) {
         // As the transfers call them: a batch of simd::kLanes particles at a time.
         for (std::size_t i = 0; i < F.size(); i += simd::kLanes) {
             for (std::size_t k = i; k < i + simd::kLanes; ++k) {
-                if constexpr (requires { sp.state.F; }) sp.state.F[k] = F[k];
+                if constexpr (requires { sp.state.F; }) sp.state.F[k] = F[k].cast<double>();
                 if constexpr (requires { sp.state.Fe; }) sp.state.Fe[k] = F[k];
             }
             kirchhoffOfRange<M>(sp.params, sp.state, i, simd::kLanes, tau);

@@ -143,7 +143,22 @@ public:
     }
     template <class T>
     void array(std::vector<T>& a) {
-        if (value<uint32_t>() != sizeof(T)) fail("an array's element size differs from this program's");
+        const uint32_t elementSize = value<uint32_t>();
+        // Format 3 kept the elastic models' F in float: read it as written and widen it.
+        if constexpr (std::is_same_v<T, Mat3d>)
+            if (elementSize == sizeof(Mat3f)) {
+                std::vector<Mat3f> narrow;
+                elements(narrow);
+                a.resize(narrow.size());
+                for (std::size_t i = 0; i < narrow.size(); ++i) a[i] = narrow[i].cast<double>();
+                return;
+            }
+        if (elementSize != sizeof(T)) fail("an array's element size differs from this program's");
+        elements(a);
+    }
+    /// An array's count and Blosc chunks, once its element size is known to be T's.
+    template <class T>
+    void elements(std::vector<T>& a) {
         const uint64_t count = value<uint64_t>();
         if (count > uint64_t(end_ - p_) * 1024)
             fail("an array claims more elements than the file can hold");  // Blosc ratio bound

@@ -58,8 +58,11 @@ struct ElasticParams {
 };
 
 /// Per-particle state of those models: F alone, updated by F <- (I + dt grad v) F (thesis 3.19).
+/// F is kept in double: in float a step's increment dt grad v F below half an ulp of F's entries (6e-8 near 1)
+/// is lost, so a stiff solid moving slowly stops registering its strain while its particles still move. A
+/// cantilever under gravity then rose 6% of its deflection a second (docs/method.md, section 5).
 struct DeformationGradientState {
-    std::vector<Mat3f> F;
+    std::vector<Mat3d> F;
     template <class Fn>
     void forEachArray(Fn&& f) {
         f(F);
@@ -68,8 +71,10 @@ struct DeformationGradientState {
     void forEachArray(Fn&& f) const {
         f(F);
     }
-    void appendRest(std::size_t n) { F.resize(F.size() + n, Mat3f::Identity()); }
-    void update(std::size_t i, const Mat3f& gradV, float dt) { F[i] = (Mat3f::Identity() + dt * gradV) * F[i]; }
+    void appendRest(std::size_t n) { F.resize(F.size() + n, Mat3d::Identity()); }
+    /// dt grad v is small and exact enough in float; adding it to I is where float would round it away.
+    void update(std::size_t i, const Mat3f& gradV, float dt) { F[i] = (Mat3d::Identity() + (dt * gradV).cast<double>()) * F[i]; }
+    Mat3f single(std::size_t i) const { return F[i].cast<float>(); }
 };
 
 }  // namespace mpm

@@ -48,22 +48,26 @@ struct FixedCorotated {
         return kirchhoffOf<T>(mu, lambda, F) * F.inverse().transpose();
     }
 
-    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.F[i]); }
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
+        return kirchhoffOf<float>(m.mu, m.lambda, s.single(i));
+    }
     /// kirchhoff for particles first .. first + n - 1 (n <= simd::kLanes), their SVDs in SIMD lanes.
     static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+        Mat3f F[simd::kLanes];
+        for (int k = 0; k < simd::kLanes; ++k) F[k] = k < n ? s.single(first + k) : Mat3f::Identity();
         Svd3<float> d[simd::kLanes];
-        svd3Batch(&s.F[first], n, d);
-        for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m[k].mu, m[k].lambda, s.F[first + k], d[k]);
+        svd3Batch(F, n, d);
+        for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m[k].mu, m[k].lambda, F[k], d[k]);
     }
     static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
         s.update(i, gradV, dt);
     }
-    static double energyDensity(const Params& m, const State& s, std::size_t i) {
-        return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
-    }
-    static float volumeRatio(const State& s, std::size_t i) { return s.F[i].determinant(); }
-    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.F[i]; }
-    static float stiffnessKey(const State& s, std::size_t i) { return s.F[i].determinant(); }  // finite check; c is constant
+    static double energyDensity(const Params& m, const State& s, std::size_t i) { return psi<double>(m.mu, m.lambda, s.F[i]); }
+    static float volumeRatio(const State& s, std::size_t i) { return float(s.F[i].determinant()); }
+    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.single(i); }
+    static float stiffnessKey(const State& s, std::size_t i) {
+        return float(s.F[i].determinant());
+    }  // finite check; c is constant
     static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }
 };
 

@@ -47,18 +47,18 @@ struct NeoHookean {
         return mu * (F - FinvT) + lambda * std::log(F.determinant()) * FinvT;
     }
 
-    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.F[i]); }
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
+        return kirchhoffOf<float>(m.mu, m.lambda, s.single(i));
+    }
     static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
         s.update(i, gradV, dt);
     }
-    static double energyDensity(const Params& m, const State& s, std::size_t i) {
-        return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
-    }
-    static float volumeRatio(const State& s, std::size_t i) { return s.F[i].determinant(); }
-    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.F[i]; }
+    static double energyDensity(const Params& m, const State& s, std::size_t i) { return psi<double>(m.mu, m.lambda, s.F[i]); }
+    static float volumeRatio(const State& s, std::size_t i) { return float(s.F[i].determinant()); }
+    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.single(i); }
     /// J itself, or NaN once the element has inverted (stops the run).
     static float stiffnessKey(const State& s, std::size_t i) {
-        const float J = s.F[i].determinant();
+        const float J = float(s.F[i].determinant());
         return J > 0.0f ? J : std::numeric_limits<float>::quiet_NaN();
     }
     static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }

@@ -44,16 +44,14 @@ struct LinearElastic {
     }
 
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
-        return piola<float>(m.mu, m.lambda, s.F[i]) * s.F[i].transpose();
+        return piola<float>(m.mu, m.lambda, s.single(i)) * s.single(i).transpose();
     }
     static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {
         s.update(i, gradV, dt);
     }
-    static double energyDensity(const Params& m, const State& s, std::size_t i) {
-        return psi<double>(m.mu, m.lambda, s.F[i].cast<double>());
-    }
-    static float volumeRatio(const State& s, std::size_t i) { return s.F[i].determinant(); }
-    static float stiffnessKey(const State& s, std::size_t i) { return s.F[i].determinant(); }
+    static double energyDensity(const Params& m, const State& s, std::size_t i) { return psi<double>(m.mu, m.lambda, s.F[i]); }
+    static float volumeRatio(const State& s, std::size_t i) { return float(s.F[i].determinant()); }
+    static float stiffnessKey(const State& s, std::size_t i) { return float(s.F[i].determinant()); }
     static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }
 };
 

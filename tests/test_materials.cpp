@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <random>
 
@@ -227,7 +228,7 @@ void expectBatchMatchesScalar() {
         Mat3f F = Mat3f::Identity();
         for (int k = 0; k < 9; ++k) F(k / 3, k % 3) += u(rng), gradV[i](k / 3, k % 3) = 10.0f * u(rng);
         if constexpr (requires { one.state.F; })
-            one.state.F[i] = batch.state.F[i] = F;
+            one.state.F[i] = batch.state.F[i] = F.cast<double>();
         else
             one.state.Fe[i] = batch.state.Fe[i] = F;
     }
@@ -256,6 +257,32 @@ TEST(MaterialBatch, StressAndReturnMapMatchOneParticleAtATime) {
     expectBatchMatchesScalar<NeoHookean>();  // no batch of its own: the fallback loop
     expectBatchMatchesScalar<VonMises>();
     expectBatchMatchesScalar<HerschelBulkley>();
+}
+
+// A stiff solid moving slowly: dt = 1e-5 s and a stretch and shear rate of 1e-4 /s give increments of 1e-9 a step, a
+// sixtieth of float's half ulp at 1, which a float F rounded away at every step (it stayed I). After 1e5 steps F must
+// be the product of the steps' factors: (1 + a)^N on the diagonal and (1 + a)^N - 1 below it; the tolerance, 2e-11, is
+// twice the worst case of 1e5 steps' double rounding (a half ulp at 1, 1.1e-16, a step).
+template <class M>
+void expectFRegistersASlowStrain() {
+    const float dt = 1e-5f;
+    Mat3f gradV = Mat3f::Zero();
+    gradV(0, 0) = 1e-4f, gradV(1, 0) = 1e-4f;
+    const int steps = 100000;
+    const double a = double(dt * gradV(0, 0));  // the increment as the update forms it, in float
+    typename M::State s;
+    s.appendRest(1);
+    for (int k = 0; k < steps; ++k) M::updateDeformation(typename M::Params{}, s, 0, gradV, dt);
+    const double grown = std::expm1(steps * std::log1p(a));
+    EXPECT_NEAR(s.F[0](0, 0) - 1.0, grown, 2e-11) << M::kSceneName;
+    EXPECT_NEAR(s.F[0](1, 0), grown, 2e-11) << M::kSceneName;
+    EXPECT_EQ(s.F[0](1, 1), 1.0) << M::kSceneName;
+    EXPECT_GT(s.F[0](0, 0) - 1.0, 0.99e-4) << M::kSceneName;  // the strain 1e-4 is there
+}
+
+TEST(ElasticModels, FRegistersAStrainRateWhoseStepsFloatCouldNotHold) {
+    expectFRegistersASlowStrain<FixedCorotated>();
+    expectFRegistersASlowStrain<NeoHookean>();
 }
 
 TEST(NeoHookeanModel, InvertedElementIsReportedNotClamped) {

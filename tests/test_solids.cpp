@@ -19,7 +19,7 @@ int addJellyBlock(Simulation& sim, const Vec3d& lo, const Vec3d& hi, const Vec3f
 double meanJ(const Simulation& sim) {
     const auto& sp = std::get<Species<FixedCorotated>>(sim.species()[0]);
     double sum = 0;
-    for (const Mat3f& F : sp.state.F) sum += F.determinant();
+    for (const Mat3d& F : sp.state.F) sum += F.determinant();
     return sum / double(sp.size());
 }
 }  // namespace

@@ -87,7 +87,7 @@ CaseResult slide(const CaseConfig& c, const Slope& k) {
         sigma(0, 1) = sigma(1, 0) = rho * g * std::sin(theta) * depth;
         const Eigen::Matrix3d strain =
             (sigma - lambda / (2 * mu + 3 * lambda) * sigma.trace() * Eigen::Matrix3d::Identity()) / (2 * mu);
-        sp.state.F[i] = (R * (Eigen::Matrix3d::Identity() + strain) * R.transpose()).cast<float>();
+        sp.state.F[i] = R * (Eigen::Matrix3d::Identity() + strain) * R.transpose();
         sp.p.x[i] = R * sp.p.x[i];
     }
     const Vec3d downhill = R * Vec3d::UnitX();
