@@ -144,7 +144,7 @@ public:
     template <class T>
     void array(std::vector<T>& a) {
         const uint32_t elementSize = value<uint32_t>();
-        // Format 3 kept the elastic models' F in float: read it as written and widen it.
+        // Formats 2 and 3 kept the elastic models' F in float: read it as written and widen it.
         if constexpr (std::is_same_v<T, Mat3d>)
             if (elementSize == sizeof(Mat3f)) {
                 std::vector<Mat3f> narrow;

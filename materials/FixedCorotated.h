@@ -65,9 +65,8 @@ struct FixedCorotated {
     static double energyDensity(const Params& m, const State& s, std::size_t i) { return psi<double>(m.mu, m.lambda, s.F[i]); }
     static float volumeRatio(const State& s, std::size_t i) { return float(s.F[i].determinant()); }
     static Mat3f deformationGradient(const State& s, std::size_t i) { return s.single(i); }
-    static float stiffnessKey(const State& s, std::size_t i) {
-        return float(s.F[i].determinant());
-    }  // finite check; c is constant
+    /// J, for the finite check alone: the wave speed does not depend on the state.
+    static float stiffnessKey(const State& s, std::size_t i) { return float(s.F[i].determinant()); }
     static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }
 };
 
