@@ -194,7 +194,7 @@ void BM_Material(benchmark::State& st) {
         for (std::size_t i = 0; i < F.size(); i += simd::kLanes) {
             for (std::size_t k = i; k < i + simd::kLanes; ++k) {
                 if constexpr (requires { sp.state.F; }) sp.state.F[k] = F[k].cast<double>();
-                if constexpr (requires { sp.state.Fe; }) sp.state.Fe[k] = F[k];
+                if constexpr (requires { sp.state.Fe; }) sp.state.Fe[k] = F[k].cast<double>();
             }
             kirchhoffOfRange<M>(sp.params, sp.state, i, simd::kLanes, tau);
             for (const Mat3f& t : tau) sum += t;

@@ -144,17 +144,21 @@ public:
     template <class T>
     void array(std::vector<T>& a) {
         const uint32_t elementSize = value<uint32_t>();
-        // Formats 2 and 3 kept the elastic models' F in float: read it as written and widen it.
+        // Older formats kept in float what this program keeps in double (formats 2 and 3 the elastic models' F,
+        // formats 2-4 the plastic models' F_E and snow's J_P): read it as written and widen it.
         if constexpr (std::is_same_v<T, Mat3d>)
-            if (elementSize == sizeof(Mat3f)) {
-                std::vector<Mat3f> narrow;
-                elements(narrow);
-                a.resize(narrow.size());
-                for (std::size_t i = 0; i < narrow.size(); ++i) a[i] = narrow[i].cast<double>();
-                return;
-            }
+            if (elementSize == sizeof(Mat3f)) return widened<Mat3f>(a, [](const Mat3f& f) { return f.cast<double>(); });
+        if constexpr (std::is_same_v<T, double>)
+            if (elementSize == sizeof(float)) return widened<float>(a, [](float f) { return double(f); });
         if (elementSize != sizeof(T)) fail("an array's element size differs from this program's");
         elements(a);
+    }
+    template <class Narrow, class T, class Widen>
+    void widened(std::vector<T>& a, Widen widen) {
+        std::vector<Narrow> narrow;
+        elements(narrow);
+        a.resize(narrow.size());
+        for (std::size_t i = 0; i < narrow.size(); ++i) a[i] = widen(narrow[i]);
     }
     /// An array's count and Blosc chunks, once its element size is known to be T's.
     template <class T>

@@ -54,9 +54,8 @@ struct FixedCorotated {
     /// kirchhoff for particles first .. first + n - 1 (n <= simd::kLanes), their SVDs in SIMD lanes.
     static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
         Mat3f F[simd::kLanes];
-        for (int k = 0; k < simd::kLanes; ++k) F[k] = k < n ? s.single(first + k) : Mat3f::Identity();
         Svd3<float> d[simd::kLanes];
-        svd3Batch(F, n, d);
+        narrowAndSvd(&s.F[first], n, F, d);
         for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m[k].mu, m[k].lambda, F[k], d[k]);
     }
     static void updateDeformation(const Params&, State& s, std::size_t i, const Mat3f& gradV, float dt) {

@@ -19,7 +19,7 @@
 #include <cmath>
 #include <vector>
 
-#include "materials/SvdBatch.h"
+#include "materials/ElasticPart.h"
 #include "materials/VonMises.h"
 #include "materials/Water.h"
 
@@ -141,56 +141,50 @@ struct HerschelBulkley {
     }
     static float pressure(const Params& m, float J) { return m.bulkModulus * (Water::powNegative(J, m.gamma) - 1.0f); }
 
-    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf(m, svd3<float>(s.Fe[i])); }
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
+        return kirchhoffOf(m, svd3<float>(deformationGradient(s, i)));
+    }
     static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+        Mat3f F[simd::kLanes];
         Svd3<float> d[simd::kLanes];
-        svd3Batch(&s.Fe[first], n, d);
+        narrowAndSvd(&s.Fe[first], n, F, d);
         for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf(m[k], d[k]);
     }
 
-    /// Elastic predictor F_E trial = (I + dt grad v) F_E, then the flow over dt on its SVD.
-    static void returnMap(const Params& m, State& s, std::size_t i, const Svd3<float>& d, float dt) {
-        const Vec3f eps = d.sigma.array().abs().max(kSmallestStretch).log().matrix();
+    /// The flow over dt on the SVD of the elastic predictor F_E trial = (I + dt grad v) F_E.
+    static void returnMap(const Params& m, State& s, std::size_t i, const ElasticTrial& t) {
+        const Vec3f eps = logStretches(t.d.sigma);
         float dAlpha = 0.0f;
-        const Vec3f H = flow(m, eps, dt, dAlpha);
-        s.Fe[i] = d.U * H.array().exp().matrix().asDiagonal() * d.V.transpose();
+        const Vec3f H = flow(m, eps, t.dt, dAlpha);
+        s.Fe[i] = t.returnedToLog(eps, H);
         s.alpha[i] += dAlpha;
     }
     static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
-        returnMap(m, s, i, svd3<float>((Mat3f::Identity() + dt * gradV) * s.Fe[i]), dt);
+        predictAndReturnMap<HerschelBulkley>(m, s, i, gradV, dt);
     }
     static void updateDeformationBatch(const LaneParams<Params>& m, State& s, std::size_t first, int n, const Mat3f* gradV,
                                        float dt) {
-        Mat3f trial[simd::kLanes];
-        for (int k = n; k < simd::kLanes; ++k) trial[k].setIdentity();  // unread, but GCC cannot see that
-        for (int k = 0; k < n; ++k) trial[k] = (Mat3f::Identity() + dt * gradV[k]) * s.Fe[first + k];
-        Svd3<float> d[simd::kLanes];
-        svd3Batch(trial, n, d);
-        for (int k = 0; k < n; ++k) returnMap(m[k], s, first + k, d[k], dt);
+        predictAndReturnMapBatch<HerschelBulkley>(m, s, first, n, gradV, dt);
     }
 
     /// G |dev eps|^2 plus the equation of state's energy (Water::energyDensity's formula) at J = det F_E.
     static double energyDensity(const Params& m, const State& s, std::size_t i) {
-        const Svd3<double> d = svd3<double>(s.Fe[i].cast<double>());
+        const Svd3<double> d = svd3<double>(s.Fe[i]);
         const Eigen::Vector3d e = d.sigma.array().abs().max(double(kSmallestStretch)).log().matrix();
         const Eigen::Vector3d dev = e - Eigen::Vector3d::Constant(e.sum() / kDim);
         const double k = m.bulkModulus, g = m.gamma, J = std::exp(e.sum());
         return double(m.shearModulus) * dev.squaredNorm() - k * ((std::pow(J, 1.0 - g) - 1.0) / (1.0 - g) - (J - 1.0));
     }
-    static float volumeRatio(const State& s, std::size_t i) { return s.Fe[i].determinant(); }
-    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.Fe[i]; }
+    static float volumeRatio(const State& s, std::size_t i) { return float(s.Fe[i].determinant()); }
+    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.Fe[i].cast<float>(); }
     static float plasticStrain(const State& s, std::size_t i) { return s.alpha[i]; }
     /// The P-wave speed sqrt((k gamma J^(1-gamma) + 4 G / 3) / rho0): the equation of state stiffens as J shrinks.
-    static float stiffnessKey(const State& s, std::size_t i) { return s.Fe[i].determinant(); }
+    static float stiffnessKey(const State& s, std::size_t i) { return float(s.Fe[i].determinant()); }
     static float waveSpeed(const Params& m, float minJ) {
         const float J = std::fmax(minJ, 1e-3f);
         const float bulk = m.bulkModulus * m.gamma * std::pow(J, 1.0f - m.gamma);
         return std::sqrt((bulk + 4.0f / 3.0f * m.shearModulus) / m.density);
     }
-
-private:
-    /// A floor under the singular values before their logarithm (a crushed particle's stretch of 0 has none).
-    static constexpr float kSmallestStretch = 1e-12f;
 };
 
 }  // namespace mpm

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "materials/Elastic.h"
-#include "materials/SvdBatch.h"
+#include "materials/ElasticPart.h"
 
 namespace mpm {
 
@@ -46,7 +46,7 @@ struct Sand {
     };
 
     struct State {
-        std::vector<Mat3f> Fe;
+        std::vector<Mat3d> Fe;     ///< in double: materials/ElasticPart.h
         std::vector<float> q;      ///< accumulated plastic strain (hardening state)
         std::vector<float> alpha;  ///< cone coefficient from the friction angle
         std::vector<float> logVc;  ///< volume correction: log volume to add back
@@ -65,7 +65,7 @@ struct Sand {
             f(logVc);
         }
         void appendRest(std::size_t n, const Params& m) {
-            Fe.resize(Fe.size() + n, Mat3f::Identity());
+            Fe.resize(Fe.size() + n, Mat3d::Identity());
             q.resize(q.size() + n, 0.0f);
             alpha.resize(alpha.size() + n, alphaOf(m, 0.0f));
             logVc.resize(logVc.size() + n, 0.0f);
@@ -186,11 +186,14 @@ struct Sand {
         return kirchhoffOf<T>(mu, lambda, F) * F.inverse().transpose();
     }
 
-    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) { return kirchhoffOf<float>(m.mu, m.lambda, s.Fe[i]); }
+    static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
+        return kirchhoffOf<float>(m.mu, m.lambda, deformationGradient(s, i));
+    }
     /// kirchhoff for n <= simd::kLanes particles from first, their SVDs in SIMD lanes.
     static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+        Mat3f F[simd::kLanes];
         Svd3<float> d[simd::kLanes];
-        svd3Batch(&s.Fe[first], n, d);
+        narrowAndSvd(&s.Fe[first], n, F, d);
         for (int k = 0; k < n; ++k) tau[k] = kirchhoffOf<float>(m[k].mu, m[k].lambda, d[k]);
     }
 
@@ -203,25 +206,24 @@ struct Sand {
         predictAndReturnMapBatch<Sand>(m, s, first, n, gradV, dt);
     }
     /// Project eps = ln Sigma of the trial F_E = U Sigma V^T (plus the volume correction) and harden.
-    static void returnMap(const Params& m, State& s, std::size_t i, const Svd3<float>& d) {
-        Vec3f eps = d.sigma.array().abs().max(1e-12f).log().matrix();
+    static void returnMap(const Params& m, State& s, std::size_t i, const ElasticTrial& t) {
+        const Vec3f lnSigma = logStretches(t.d.sigma);
+        Vec3f eps = lnSigma;
         if (m.volumeCorrection) eps += Vec3f::Constant(s.logVc[i] / kDim);
         const Projection p = m.surface == YieldSurface::MohrCoulomb
                                  ? projectMohrCoulomb(m, eps, std::sin(frictionAngleDegrees(m, s.q[i]) * float(M_PI) / 180.0f))
                                  : project(m, eps, s.alpha[i]);
-        s.Fe[i] = d.U * p.H.array().exp().matrix().asDiagonal() * d.V.transpose();
+        s.Fe[i] = t.returnedToLog(lnSigma, p.H);
         if (m.volumeCorrection) s.logVc[i] = eps.sum() - p.H.sum();
         s.q[i] += p.dq;
         s.alpha[i] = alphaOf(m, s.q[i]);
     }
-    static double energyDensity(const Params& m, const State& s, std::size_t i) {
-        return psi<double>(m.mu, m.lambda, s.Fe[i].cast<double>());
-    }
-    static float volumeRatio(const State& s, std::size_t i) { return s.Fe[i].determinant(); }
-    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.Fe[i]; }
+    static double energyDensity(const Params& m, const State& s, std::size_t i) { return psi<double>(m.mu, m.lambda, s.Fe[i]); }
+    static float volumeRatio(const State& s, std::size_t i) { return float(s.Fe[i].determinant()); }
+    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.Fe[i].cast<float>(); }
     /// The volume change the return mapping took out of Fe, which the volume correction keeps as log v_c.
     static float plasticVolumeRatio(const State& s, std::size_t i) { return std::exp(s.logVc[i]); }
-    static float stiffnessKey(const State& s, std::size_t i) { return s.Fe[i].determinant(); }
+    static float stiffnessKey(const State& s, std::size_t i) { return float(s.Fe[i].determinant()); }
     static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }
 };
 

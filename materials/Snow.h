@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 
+#include "materials/ElasticPart.h"
 #include "materials/FixedCorotated.h"
 
 namespace mpm {
@@ -33,8 +34,8 @@ struct Snow {
     }
 
     struct State {
-        std::vector<Mat3f> Fe;
-        std::vector<float> Jp;
+        std::vector<Mat3d> Fe;   ///< in double: materials/ElasticPart.h
+        std::vector<double> Jp;  ///< in double for the same reason: a step's plastic volume change can be under float's ulp
         template <class Fn>
         void forEachArray(Fn&& f) {
             f(Fe);
@@ -46,8 +47,8 @@ struct Snow {
             f(Jp);
         }
         void appendRest(std::size_t n) {
-            Fe.resize(Fe.size() + n, Mat3f::Identity());
-            Jp.resize(Jp.size() + n, 1.0f);
+            Fe.resize(Fe.size() + n, Mat3d::Identity());
+            Jp.resize(Jp.size() + n, 1.0);
         }
     };
 
@@ -63,16 +64,17 @@ struct Snow {
     static float hardening(const Params& m, float Jp) { return std::exp(m.xi * (1.0f - Jp)); }
 
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
-        const float h = hardening(m, s.Jp[i]);
-        return FixedCorotated::kirchhoffOf<float>(m.mu * h, m.lambda * h, s.Fe[i]);
+        const float h = hardening(m, float(s.Jp[i]));
+        return FixedCorotated::kirchhoffOf<float>(m.mu * h, m.lambda * h, deformationGradient(s, i));
     }
     /// kirchhoff for n <= simd::kLanes particles from first, their SVDs in SIMD lanes.
     static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+        Mat3f F[simd::kLanes];
         Svd3<float> d[simd::kLanes];
-        svd3Batch(&s.Fe[first], n, d);
+        narrowAndSvd(&s.Fe[first], n, F, d);
         for (int k = 0; k < n; ++k) {
-            const float h = hardening(m[k], s.Jp[first + k]);
-            tau[k] = FixedCorotated::kirchhoffOf<float>(m[k].mu * h, m[k].lambda * h, s.Fe[first + k], d[k]);
+            const float h = hardening(m[k], float(s.Jp[first + k]));
+            tau[k] = FixedCorotated::kirchhoffOf<float>(m[k].mu * h, m[k].lambda * h, F[k], d[k]);
         }
     }
 
@@ -85,11 +87,13 @@ struct Snow {
         predictAndReturnMapBatch<Snow>(m, s, first, n, gradV, dt);
     }
     /// Clamp sigma of the trial F_E = U Sigma V^T, and push the clamped-away volume into J_P.
-    static void returnMap(const Params& m, State& s, std::size_t i, Svd3<float> d) {
-        const float Jtrial = d.sigma.prod();
-        for (int a = 0; a < 3; ++a) d.sigma[a] = std::clamp(d.sigma[a], 1.0f - m.thetaC, 1.0f + m.thetaS);
-        s.Fe[i] = d.U * d.sigma.asDiagonal() * d.V.transpose();
-        s.Jp[i] = std::min(s.Jp[i] * Jtrial / d.sigma.prod(), kMaxPlasticVolume);
+    static void returnMap(const Params& m, State& s, std::size_t i, const ElasticTrial& t) {
+        const Vec3f clamped = t.d.sigma.cwiseMax(1.0f - m.thetaC).cwiseMin(1.0f + m.thetaS);
+        s.Fe[i] = t.returned(clamped - t.d.sigma);
+        // J_P times det(trial) / det(F_E), one ratio per stretch: exactly 1 where the stretch was not clamped.
+        double ratio = 1.0;
+        for (int a = 0; a < 3; ++a) ratio *= double(t.d.sigma[a]) / double(clamped[a]);
+        s.Jp[i] = std::min(s.Jp[i] * ratio, double(kMaxPlasticVolume));
     }
     /// J_P's ceiling. A particle that flew off alone keeps its affine velocity C under APIC, so a C with
     /// positive trace grows J_P exponentially, to float overflow within seconds (the spinning sphere of the
@@ -97,14 +101,14 @@ struct Snow {
     /// xi of 0.1 or more, so the cap changes no stress that float can tell apart.
     static constexpr float kMaxPlasticVolume = 1e3f;
     static double energyDensity(const Params& m, const State& s, std::size_t i) {
-        const double h = hardening(m, s.Jp[i]);
-        return FixedCorotated::psi<double>(m.mu * h, m.lambda * h, s.Fe[i].cast<double>());
+        const double h = hardening(m, float(s.Jp[i]));
+        return FixedCorotated::psi<double>(m.mu * h, m.lambda * h, s.Fe[i]);
     }
-    static float volumeRatio(const State& s, std::size_t i) { return s.Fe[i].determinant() * s.Jp[i]; }
-    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.Fe[i]; }
-    static float plasticVolumeRatio(const State& s, std::size_t i) { return s.Jp[i]; }
+    static float volumeRatio(const State& s, std::size_t i) { return float(s.Fe[i].determinant() * s.Jp[i]); }
+    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.Fe[i].cast<float>(); }
+    static float plasticVolumeRatio(const State& s, std::size_t i) { return float(s.Jp[i]); }
     /// Hardening grows as J_P shrinks, so the smallest J_P sets the fastest wave.
-    static float stiffnessKey(const State& s, std::size_t i) { return s.Jp[i]; }
+    static float stiffnessKey(const State& s, std::size_t i) { return float(s.Jp[i]); }
     static float waveSpeed(const Params& m, float minJp) {
         return elasticWaveSpeed(m.mu, m.lambda, m.density) * std::sqrt(hardening(m, minJp));
     }

@@ -158,24 +158,11 @@ inline void svd3Batch(const Mat3f* F, int n, Svd3<float>* out) {
     }
 }
 
-/// The elastic predictor of the plastic models (snow, sand), F_E trial = (I + dt grad v) F_E, then the
-/// model's return map on the trial's SVD: one particle ...
-template <class M>
-void predictAndReturnMap(const typename M::Params& m, typename M::State& s, std::size_t i, const Mat3f& gradV, float dt) {
-    const Mat3f trial = (Mat3f::Identity() + dt * gradV) * s.Fe[i];
-    M::returnMap(m, s, i, svd3<float>(trial));
-}
-
-/// ... and particles first .. first + n - 1 (n <= simd::kLanes), their SVDs in SIMD lanes.
-template <class M>
-void predictAndReturnMapBatch(const LaneParams<typename M::Params>& m, typename M::State& s, std::size_t first, int n,
-                              const Mat3f* gradV, float dt) {
-    Mat3f trial[simd::kLanes];
-    for (int k = n; k < simd::kLanes; ++k) trial[k].setIdentity();  // unread, but GCC cannot see that
-    for (int k = 0; k < n; ++k) trial[k] = (Mat3f::Identity() + dt * gradV[k]) * s.Fe[first + k];
-    Svd3<float> d[simd::kLanes];
-    svd3Batch(trial, n, d);
-    for (int k = 0; k < n; ++k) M::returnMap(m[k], s, first + k, d[k]);
+/// The state's F in double rounded to float, for n <= simd::kLanes particles from Fd (identity in the unused lanes),
+/// and their SVDs: the stress is evaluated in float (materials/Elastic.h, materials/ElasticPart.h).
+inline void narrowAndSvd(const Mat3d* Fd, int n, Mat3f* F, Svd3<float>* out) {
+    for (int k = 0; k < simd::kLanes; ++k) F[k] = k < n ? Mat3f(Fd[k].cast<float>()) : Mat3f::Identity();
+    svd3Batch(F, n, out);
 }
 
 }  // namespace mpm

@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "materials/Elastic.h"
+#include "materials/ElasticPart.h"
 #include "materials/Sand.h"
-#include "materials/SvdBatch.h"
 
 namespace mpm {
 
@@ -40,7 +40,7 @@ struct VonMises {
     };
 
     struct State {
-        std::vector<Mat3f> Fe;
+        std::vector<Mat3d> Fe;     ///< in double: materials/ElasticPart.h
         std::vector<float> alpha;  ///< equivalent plastic strain
         template <class Fn>
         void forEachArray(Fn&& f) {
@@ -53,7 +53,7 @@ struct VonMises {
             f(alpha);
         }
         void appendRest(std::size_t n) {
-            Fe.resize(Fe.size() + n, Mat3f::Identity());
+            Fe.resize(Fe.size() + n, Mat3d::Identity());
             alpha.resize(alpha.size() + n, 0.0f);
         }
     };
@@ -98,11 +98,12 @@ struct VonMises {
         return d.U * t.asDiagonal() * d.U.transpose();
     }
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
-        return henckyTau(m.mu, m.lambda, svd3<float>(s.Fe[i]));
+        return henckyTau(m.mu, m.lambda, svd3<float>(deformationGradient(s, i)));
     }
     static void kirchhoffBatch(const LaneParams<Params>& m, const State& s, std::size_t first, int n, Mat3f* tau) {
+        Mat3f F[simd::kLanes];
         Svd3<float> d[simd::kLanes];
-        svd3Batch(&s.Fe[first], n, d);
+        narrowAndSvd(&s.Fe[first], n, F, d);
         for (int k = 0; k < n; ++k) tau[k] = henckyTau(m[k].mu, m[k].lambda, d[k]);
     }
 
@@ -114,26 +115,22 @@ struct VonMises {
                                        float dt) {
         predictAndReturnMapBatch<VonMises>(m, s, first, n, gradV, dt);
     }
-    static void returnMap(const Params& m, State& s, std::size_t i, const Svd3<float>& d) {
-        const Vec3f eps = d.sigma.array().abs().max(kSmallestStretch).log().matrix();
+    static void returnMap(const Params& m, State& s, std::size_t i, const ElasticTrial& t) {
+        const Vec3f eps = logStretches(t.d.sigma);
         float dAlpha = 0.0f;
         const Vec3f H = project(m, eps, s.alpha[i], dAlpha);
-        s.Fe[i] = d.U * H.array().exp().matrix().asDiagonal() * d.V.transpose();
+        s.Fe[i] = t.returnedToLog(eps, H);
         s.alpha[i] += dAlpha;
     }
 
     static double energyDensity(const Params& m, const State& s, std::size_t i) {
-        return Sand::psi<double>(m.mu, m.lambda, s.Fe[i].cast<double>());
+        return Sand::psi<double>(m.mu, m.lambda, s.Fe[i]);
     }
-    static float volumeRatio(const State& s, std::size_t i) { return s.Fe[i].determinant(); }
-    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.Fe[i]; }
+    static float volumeRatio(const State& s, std::size_t i) { return float(s.Fe[i].determinant()); }
+    static Mat3f deformationGradient(const State& s, std::size_t i) { return s.Fe[i].cast<float>(); }
     static float plasticStrain(const State& s, std::size_t i) { return s.alpha[i]; }
-    static float stiffnessKey(const State& s, std::size_t i) { return s.Fe[i].determinant(); }
+    static float stiffnessKey(const State& s, std::size_t i) { return float(s.Fe[i].determinant()); }
     static float waveSpeed(const Params& m, float) { return elasticWaveSpeed(m.mu, m.lambda, m.density); }
-
-private:
-    /// A floor under the singular values before their logarithm (a crushed particle's stretch of 0 has none).
-    static constexpr float kSmallestStretch = 1e-12f;
 };
 
 }  // namespace mpm

@@ -86,13 +86,13 @@ const GoldenScene kScenes[] = {
                   "velocity": [6, 2, 0] } ],
       "colliders": [ { "type": "plane", "point": [0.5, 0, 0], "normal": [-1, 0, 0], "boundary": "sticky" },
                      { "type": "plane", "boundary": "slip", "friction": 0.2 } ] })",
-     1, 20, 0x666c6ea0dfe88418ull},
+     1, 20, 0xdcf131a60b0ea50eull},
     {"sand_pile_pic", R"({
       "simulation": { "dx": 0.04, "substeps": 5, "transfer": "pic" },
       "sets": [ { "material": "sand", "shape": { "type": "box", "min": [0, 0, 0], "max": [0.2, 0.4, 0.2] },
                   "material_params": { "h0": 30 } } ],
       "colliders": [ { "type": "plane", "boundary": "sticky" } ] })",
-     1, 20, 0x35bf4fe41dbc78f1ull},
+     1, 20, 0x77f5a0ad533bca52ull},
     {"emitter_two_species", R"({
       "simulation": { "dx": 0.05, "substeps": 4, "wall_contact": "surface" },
       "sets": [ { "name": "stream", "material": "water", "shape": { "type": "sphere", "center": [0, 0.5, 0], "radius": 0.08 },

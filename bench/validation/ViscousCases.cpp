@@ -240,7 +240,7 @@ CaseResult binghamIncline(const CaseConfig& c) {
     const auto profile = [&] {
         std::map<long, double> volume;
         for (std::size_t i = 0; i < sp.size(); ++i)
-            volume[long(std::floor(sp.p.x[i][0] / strip))] += sp.p.volume0[i] * sp.state.Fe[i].determinant();
+            volume[long(std::floor(sp.p.x[i][0] / strip))] += sp.p.volume0[i] * float(sp.state.Fe[i].determinant());
         std::vector<double> x, h;
         for (const auto& [b, v] : volume) x.push_back((double(b) + 0.5) * strip), h.push_back(v / (strip * depth));
         return std::pair{x, h};
