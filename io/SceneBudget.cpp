@@ -276,7 +276,8 @@ SceneBudget estimateBudget(const SceneDesc& scene, bool countExactly, int ranks,
         p << (st.substepsPerFrame > st.maxSubstepsPerFrame ? "/simulation/substeps" : "/simulation")
           << ": frames would need about " << b.substepsPerFrame << " substeps each (dt = " << b.dt << " s, set by " << b.stepCause
           << "); the limit is simulation.max_substeps_per_frame = " << st.maxSubstepsPerFrame
-          << "; lower the stiffness or the speed, raise dx, or raise the limit";
+          << "; lower the stiffness or the speed, raise dx, raise simulation.fps (shorter frames need fewer substeps each), or "
+             "raise the limit";
         b.problems.push_back(p.str());
     }
     for (std::size_t i = 0; i < scene.colliders.size(); ++i) {
