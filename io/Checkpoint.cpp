@@ -145,7 +145,7 @@ public:
     void array(std::vector<T>& a) {
         const uint32_t elementSize = value<uint32_t>();
         // Older formats kept in float what this program keeps in double (formats 2 and 3 the elastic models' F,
-        // formats 2-4 the plastic models' F_E and snow's J_P): read it as written and widen it.
+        // formats 2-4 the plastic models' F_E, snow's J_P and water's J): read it as written and widen it.
         if constexpr (std::is_same_v<T, Mat3d>)
             if (elementSize == sizeof(Mat3f)) return widened<Mat3f>(a, [](const Mat3f& f) { return f.cast<double>(); });
         if constexpr (std::is_same_v<T, double>)

@@ -52,7 +52,7 @@ struct Checkpoint {
 
 /// The current checkpoint format, and the oldest this program still reads.
 inline constexpr int kCheckpointFormat =
-    5;  ///< 3: a species' material by its scene name; 4: elastic F in double; 5: plastic F_E and J_P in double
+    5;  ///< 3: a species' material by its scene name; 4: elastic F in double; 5: plastic F_E, J_P and water's J in double
 inline constexpr int kOldestCheckpointFormat = 2;  ///< 2: continuous emitters' progress; materials by list position
 
 /// Writes `state` atomically to path (io/AtomicFile.h). Throws WriteError.

@@ -32,7 +32,9 @@ struct Water {
     };
 
     struct State {
-        std::vector<float> J;  ///< volume ratio det F
+        /// Volume ratio det F, in double: in float a step's change under half an ulp (6e-8) is lost, so a stiff
+        /// column that settles slowly stops registering its volume while its particles move (docs/method.md, section 5).
+        std::vector<double> J;
         template <class F>
         void forEachArray(F&& f) {
             f(J);
@@ -41,7 +43,7 @@ struct Water {
         void forEachArray(F&& f) const {
             f(J);
         }
-        void appendRest(std::size_t n) { J.resize(J.size() + n, 1.0f); }
+        void appendRest(std::size_t n) { J.resize(J.size() + n, 1.0); }
     };
 
     /// Scene keys. The defaults keep the thesis's k = 50 at rho = 1 scaled with the density, so that the
@@ -78,14 +80,16 @@ struct Water {
         return std::pow(J, -gamma);
     }
 
+    /// The stress in float from J rounded once, an error that does not accumulate.
     static Mat3f kirchhoff(const Params& m, const State& s, std::size_t i) {
-        const float J = s.J[i];
+        const float J = float(s.J[i]);
         return Mat3f::Identity() * (-J * pressure(m, J));
     }
 
+    /// dt tr(grad v) is exact enough in float; adding it to 1 is where float would round it away.
     static void updateDeformation(const Params& m, State& s, std::size_t i, const Mat3f& gradV, float dt) {
-        const float J = s.J[i] * (1.0f + dt * gradV.trace());
-        s.J[i] = m.tension ? J : std::fmin(J, 1.0f);
+        const double J = s.J[i] * (1.0 + double(dt * gradV.trace()));
+        s.J[i] = m.tension ? J : std::fmin(J, 1.0);
     }
 
     /// Psi(J) - Psi(1) = -k ((J^(1-gamma) - 1) / (1 - gamma) - (J - 1)): zero at rest exactly, and without the
@@ -95,10 +99,10 @@ struct Water {
         return -k * ((std::pow(J, 1.0 - g) - 1.0) / (1.0 - g) - (J - 1.0));
     }
 
-    static float volumeRatio(const State& s, std::size_t i) { return s.J[i]; }
+    static float volumeRatio(const State& s, std::size_t i) { return float(s.J[i]); }
 
     /// The wave speed grows as J shrinks: c = sqrt(k gamma / rho0) J^((1-gamma)/2) (docs/method.md, section 4).
-    static float stiffnessKey(const State& s, std::size_t i) { return s.J[i]; }
+    static float stiffnessKey(const State& s, std::size_t i) { return float(s.J[i]); }
     static float waveSpeed(const Params& m, float minJ) {
         const float J = std::fmax(minJ, 1e-3f);
         return std::sqrt(m.bulkModulus * m.gamma / m.density) * std::pow(J, 0.5f * (1.0f - m.gamma));

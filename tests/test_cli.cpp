@@ -384,7 +384,7 @@ TEST(Cli, RunningOutOfMemorySaysWhatWasBeingDone) {
 #if defined(__SANITIZE_ADDRESS__)
     GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space: a limit on it (ulimit -v) stops it from starting";
 #else
-    // 16 million particles (about 3.65 GiB by the estimate) under a 600 MB address-space limit (the program and its
+    // 16 million particles (about 3.71 GiB by the estimate) under a 600 MB address-space limit (the program and its
     // libraries take about 260 MB of it here): the sampling runs out, and the message names the phase, the
     // particles and the estimate, where it was a bare "out of memory" (exit 1).
     const std::string big =
@@ -395,7 +395,7 @@ TEST(Cli, RunningOutOfMemorySaysWhatWasBeingDone) {
     EXPECT_EQ(r.code, 1) << r.output;
     EXPECT_NE(r.output.find("error: simulation stopped: out of memory while sampling the particle sets"), std::string::npos)
         << r.output;
-    EXPECT_NE(r.output.find("(the scene needs about 3.65 GiB at its peak"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("(the scene needs about 3.71 GiB at its peak"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out + "/oom_0001.vdb"));
 #endif
 }

@@ -340,9 +340,9 @@ TEST(Safety, ACheckpointOfFormatTwoResumesWithEachSetsMaterialWhereverTheListOfM
         EXPECT_EQ(particlesOf(old.state.species[s]).size(), 64u) << desc.sets[s].name;
         EXPECT_EQ(paramBytes(old.state.species[s]), paramBytes(fresh->state().species[s])) << desc.sets[s].name;
     }
-    // Formats 2 and 3 kept the elastic models' F in float, formats 2-4 the plastic models' F_E and snow's J_P: each is
-    // read as written, widened to double.
-    int widenedF = 0, widenedFe = 0, snowJp = 0;
+    // Formats 2 and 3 kept the elastic models' F in float, formats 2-4 the plastic models' F_E, snow's J_P and water's J:
+    // each is read as written, widened to double.
+    int widenedF = 0, widenedFe = 0, snowJp = 0, waterJ = 0;
     const auto exactlyWidened = [](const Mat3d& F) { return F == F.template cast<float>().template cast<double>(); };
     for (const AnySpecies& species : old.state.species)
         std::visit(
@@ -362,11 +362,17 @@ TEST(Safety, ACheckpointOfFormatTwoResumesWithEachSetsMaterialWhereverTheListOfM
                         EXPECT_EQ(Jp, double(float(Jp)));
                         snowJp += 1;
                     }
+                if constexpr (requires { sp.state.J; })
+                    for (const double J : sp.state.J) {
+                        EXPECT_EQ(J, double(float(J)));
+                        waterJ += J != 1.0;
+                    }
             },
             species);
     EXPECT_GT(widenedF, 0);  // the falling blocks are strained by frame 1
     EXPECT_GT(widenedFe, 0);
     EXPECT_EQ(snowJp, 64);
+    EXPECT_GT(waterJ, 0);
     // Written again it is the current format and reads back with the same materials and bits.
     const std::string dir = tempDir("format2");
     writeCheckpoint(dir + "/again.mpmc", old.info, old.state);

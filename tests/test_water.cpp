@@ -45,3 +45,23 @@ TEST(WaterModel, HoldsNoTensionUnlessAsked) {
     EXPECT_FLOAT_EQ(s.J[0], 1.0f + dt * expand.trace());
     EXPECT_LT(Water::pressure(p, s.J[0]), 0.0f);
 }
+
+TEST(WaterModel, JRegistersACompressionWhoseStepsFloatCouldNotHold) {
+    // A compression of 1e-9 a step, under float's half ulp at 1 (6e-8): in float J stayed 1 while the particles moved.
+    // In double it is the product of the steps' factors, bit for bit, and the strain 1e-4 is there. A stiff column
+    // settling so slowly climbed 1.9e-4 m in 0.5 s with J frozen (docs/method.md, section 5).
+    Water::Params p;
+    Water::State s;
+    s.appendRest(1);
+    const float dt = 1e-5f;
+    const Mat3f compress = Mat3f::Identity() * (-1e-4f / 3.0f);
+    const double factor = 1.0 + double(dt * compress.trace());
+    double expected = 1.0;
+    for (int k = 0; k < 100000; ++k) {
+        Water::updateDeformation(p, s, 0, compress, dt);
+        expected *= factor;
+    }
+    EXPECT_EQ(s.J[0], expected);
+    EXPECT_NEAR(1.0 - s.J[0], 1e-4, 1e-8);
+    EXPECT_GT(Water::pressure(p, float(s.J[0])), 0.0f);
+}
